@@ -1,0 +1,102 @@
+"""The `python -m lerobot_contrast.eval` configuration (draccus; the comment above each field is its --help)."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+import draccus
+
+from lerobot_contrast.contrast.errors import UserError
+
+
+@dataclass
+class PolicyArgs:
+    # Which policy to evaluate: `oracle` (scripted push oracle with privileged state) or `random`.
+    type: str = "oracle"
+    # Gaussian noise added to each oracle action, in metres (0 = none).
+    noise_std: float = 0.0
+    # Probability per episode that the oracle ignores a perturbed instruction's words and executes
+    # its base instruction instead (0 = reads every instruction).
+    language_blind: float = 0.0
+
+
+@dataclass
+class EvalConfig:
+    """Contrast-set evaluation of a language-guided policy."""
+
+    # Task domain to evaluate on.
+    task: str = "language_table"
+    # Task families to sample from (default: all of the task's families), e.g. [block2block,separate].
+    families: list[str] | None = None
+    # Evaluation strategy: standard (i.i.d., full reset each trial), contrast (Algorithm 1 of the paper), or
+    # limited_intervention (new instructions in the current scene, reset only when infeasible).
+    strategy: str = "contrast"
+    # Perturbations the contrast strategy applies after each base instance, in order (default: all of the
+    # task's), e.g. [LB1,LB2,SB1,SB2].
+    perturbations: list[str] | None = None
+    # Number of i.i.d. base instances sampled for the evaluation set.
+    n_instances: int = 25
+    # Times each planned trial is run (restaging the same scene between repeats).
+    repeats: int = 1
+    # Experimenter-cost budget K in the cost model's unit; the run stops once the cumulative cost exceeds
+    # it (default: no limit).
+    budget: float | None = None
+    # Cost model: distance (metres objects are moved) or reset_time (modelled seconds of restaging).
+    cost: str = "distance"
+    # Seed of every random choice: the same seed gives the same plan and, in simulation, the same results.
+    seed: int = 0
+    # Episode length limit in control steps (10 Hz for Language-Table).
+    max_episode_steps: int = 200
+    # The policy under evaluation.
+    policy: PolicyArgs = field(default_factory=PolicyArgs)
+    # Run directory (default: outputs/contrast/<date>/<time>_<task>_<strategy>).
+    output_dir: Path | None = None
+    # Continue the run in --output_dir where it stopped.
+    resume: bool = False
+    # Print the plan (trials, what to move before each, planned cost) and exit without running anything.
+    dry_run: bool = False
+
+
+class ConfigError(UserError):
+    pass
+
+
+T = TypeVar("T")
+
+
+def _flag_names(cls: type, prefix: str = "") -> set[str]:
+    names = set()
+    for f in dataclasses.fields(cls):
+        name = prefix + f.name
+        names.add(name)
+        default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+        if dataclasses.is_dataclass(default):
+            names |= _flag_names(type(default), name + ".")
+    return names
+
+
+def parse_config(cls: type[T], argv: list[str] | None = None) -> T:
+    """Parse LeRobot-style `--name=value` flags, turning any mistake into a one-line ConfigError."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    known = _flag_names(cls) | {"config_path", "help", "h"}
+    for arg in argv:
+        if not arg.startswith("-"):
+            raise ConfigError(f"unexpected argument {arg!r}; flags look like --name=value (see --help)")
+        name = arg.lstrip("-").split("=", 1)[0]
+        if name not in known:
+            raise ConfigError(f"unknown flag --{name}; see --help for the flags this command takes")
+    try:
+        return draccus.parse(config_class=cls, args=argv)
+    except SystemExit:
+        raise
+    except Exception as error:  # draccus reports bad values with multi-line messages
+        message = " ".join(str(error).split())
+        raise ConfigError(f"invalid flag value: {message}") from None
+
+
+def config_json(config: Any) -> dict[str, Any]:
+    return draccus.encode(config)

@@ -1,0 +1,45 @@
+"""Console output: one line per trial while running, and the dry-run plan an operator would follow."""
+
+from __future__ import annotations
+
+from lerobot_contrast.contrast.scene import Scene
+from lerobot_contrast.contrast.staging import staging_moves
+from lerobot_contrast.contrast.trial import TrialRecord
+
+
+def label(perturbation: str | None) -> str:
+    return "original" if perturbation is None else f"Δ{perturbation}"
+
+
+def trial_line(record: TrialRecord, unit: str) -> str:
+    head = f"[{record.index:>4}] {label(record.perturbation):<9}"
+    if record.status != "done" or record.instance is None:
+        return f"{head} not applicable here, skipped"
+    metric = f"success={int(bool(record.success))}"
+    if record.spl is not None:
+        metric += f" spl={record.spl:.2f}"
+    return (
+        f"{head} {metric:<22} cost={record.cost:6.2f} {unit} total={record.cumulative_cost:7.2f} {unit}"
+        f"  steps={record.steps:<4} {record.instance.instruction!r}"
+    )
+
+
+def plan_lines(records: list[TrialRecord], initial_scene: Scene, unit: str) -> list[str]:
+    """The staging an operator follows, assuming the robot leaves each scene as it was staged."""
+    lines = []
+    scene = initial_scene
+    for record in records:
+        if record.status != "done" or record.instance is None:
+            lines.append(f"[{record.index:>4}] {label(record.perturbation):<9} {record.base_id}: not applicable, skipped")
+            continue
+        target = record.instance.scene
+        lines.append(
+            f"[{record.index:>4}] {label(record.perturbation):<9} {record.instance.id}  stage={record.staging:<8} "
+            f"cost={record.cost:.2f} {unit} total={record.cumulative_cost:.2f} {unit}  {record.instance.instruction!r}"
+        )
+        for move in staging_moves(scene, target):
+            start = "(off the table)" if move.start is None else f"({move.start.x:+.3f}, {move.start.y:+.3f})"
+            end = "(off the table)" if move.end is None else f"({move.end.x:+.3f}, {move.end.y:+.3f})"
+            lines.append(f"{'':>16}move {move.name:<16} {start} -> {end}  {move.distance:.3f} m")
+        scene = record.scene_after or target
+    return lines

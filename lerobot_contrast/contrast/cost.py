@@ -1,0 +1,86 @@
+"""Cost models: the experimenter effort to turn the scene the robot left behind into the next one.
+
+Only objects count; resetting the robot itself is free, as in the paper (it is the same for every
+strategy and can be automated). Language perturbations leave the scene alone and so cost nothing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.scene import Scene
+
+
+class CostModel(Protocol):
+    name: str
+    unit: str
+
+    def __call__(self, current: Scene, target: Scene) -> float: ...
+
+
+def moved_objects(current: Scene, target: Scene, tolerance: float) -> dict[str, float]:
+    """Planar distance each object must travel, for objects displaced by more than `tolerance`.
+
+    Objects only in `target` must be brought in and objects only in `current` taken away; both are
+    reported with distance 0.0 so the caller can price the handling itself.
+    """
+    moves: dict[str, float] = {}
+    for name, pose in target.objects.items():
+        before = current.objects.get(name)
+        if before is None:
+            moves[name] = 0.0
+            continue
+        distance = before.distance_to(pose)
+        if distance > tolerance:
+            moves[name] = distance
+    for name in current.objects.keys() - target.objects.keys():
+        moves[name] = 0.0
+    return moves
+
+
+@dataclass(frozen=True)
+class DistanceCost:
+    """Metres objects are moved (the paper's simulation cost).
+
+    `tolerance` ignores displacements an operator would not correct (placement precision);
+    `add_remove_m` prices bringing an object in from, or taking it out to, the side of the workspace.
+    """
+
+    tolerance: float = 0.005
+    add_remove_m: float = 0.0
+    name: str = "distance"
+    unit: str = "m"
+
+    def __call__(self, current: Scene, target: Scene) -> float:
+        moves = moved_objects(current, target, self.tolerance)
+        return sum(d if d > 0.0 else self.add_remove_m for d in moves.values())
+
+
+@dataclass(frozen=True)
+class ResetTimeCost:
+    """Seconds an operator needs to restage the scene: a fixed handling time per moved object plus travel.
+
+    In simulation this is a model; on hardware the measured reset time replaces it.
+    """
+
+    per_object_s: float = 3.0
+    hand_speed_m_s: float = 0.25
+    tolerance: float = 0.005
+    name: str = "reset_time"
+    unit: str = "s"
+
+    def __call__(self, current: Scene, target: Scene) -> float:
+        moves = moved_objects(current, target, self.tolerance)
+        return sum(self.per_object_s + d / self.hand_speed_m_s for d in moves.values())
+
+
+COST_MODELS = {"distance": DistanceCost, "reset_time": ResetTimeCost}
+
+
+def make_cost_model(name: str) -> CostModel:
+    try:
+        return COST_MODELS[name]()
+    except KeyError:
+        raise UserError(f"--cost: unknown cost model {name!r}; choose from: {', '.join(COST_MODELS)}") from None

@@ -1,0 +1,22 @@
+"""Episode metrics: success, success weighted by path length (SPL), and subgoal progress."""
+
+from __future__ import annotations
+
+
+def spl(success: bool, reference_length: float, path_length: float) -> float:
+    """Success weighted by path length: S * l / max(l, p) for reference l and actual p (Anderson et al. 2018)."""
+    if not success:
+        return 0.0
+    if reference_length <= 0.0:
+        return 1.0
+    return reference_length / max(reference_length, path_length)
+
+
+def subgoal_progress(subgoals_reached: int, n_subgoals: int) -> float:
+    """Fraction of subgoals reached in order (VLN: 0.5 for the first of two, 1.0 for both)."""
+    if n_subgoals <= 0:
+        raise ValueError("n_subgoals must be positive")
+    return min(max(subgoals_reached, 0), n_subgoals) / n_subgoals
+
+
+METRICS = ("success", "spl", "progress")

@@ -1,0 +1,113 @@
+"""Perturbations: named functions Instance -> Instance | None along one of the four contrast axes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Callable, Iterator, Literal
+
+import numpy as np
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.instance import Instance
+
+if TYPE_CHECKING:
+    from lerobot_contrast.contrast.task import Task
+
+Axis = Literal["L", "LB", "S", "SB"]
+AXES: tuple[Axis, ...] = ("L", "LB", "S", "SB")
+
+PerturbFn = Callable[[Instance, np.random.Generator], "Instance | None"]
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """A named perturbation on one axis.
+
+    `apply` receives the instance to perturb, set in the scene the robot currently faces, and
+    returns the perturbed instance or None where the perturbation does not apply there.
+    Language axes (L, LB) must leave the scene untouched, so they cost nothing to stage.
+    """
+
+    name: str
+    axis: Axis
+    apply: PerturbFn
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if self.axis not in AXES:
+            raise ValueError(f"perturbation {self.name!r}: axis must be one of {AXES}, got {self.axis!r}")
+
+    @property
+    def label(self) -> str:
+        """The paper's notation, e.g. ΔLB1."""
+        return f"Δ{self.name}"
+
+
+class UnknownPerturbationError(UserError):
+    pass
+
+
+class PerturbationRegistry:
+    """Perturbations by name, in registration order."""
+
+    def __init__(self, owner: str) -> None:
+        self.owner = owner
+        self._items: dict[str, Perturbation] = {}
+
+    def register(self, name: str, axis: Axis, description: str = "") -> Callable[[PerturbFn], PerturbFn]:
+        def decorator(fn: PerturbFn) -> PerturbFn:
+            self.add(Perturbation(name=name, axis=axis, apply=fn, description=description))
+            return fn
+
+        return decorator
+
+    def add(self, perturbation: Perturbation) -> None:
+        if perturbation.name in self._items:
+            raise ValueError(f"{self.owner}: perturbation {perturbation.name!r} is registered twice")
+        self._items[perturbation.name] = perturbation
+
+    def get(self, name: str) -> Perturbation:
+        try:
+            return self._items[name]
+        except KeyError:
+            known = ", ".join(self._items) or "none"
+            raise UnknownPerturbationError(
+                f"unknown perturbation {name!r} for task {self.owner!r}; choose from: {known}"
+            ) from None
+
+    def select(self, names: list[str] | tuple[str, ...] | None) -> list[Perturbation]:
+        """The named perturbations in the given order; all of them when `names` is None."""
+        if names is None:
+            return list(self._items.values())
+        return [self.get(name) for name in names]
+
+    def __iter__(self) -> Iterator[Perturbation]:
+        return iter(self._items.values())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._items
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+
+def perturb(task: Task, perturbation: Perturbation, instance: Instance, rng: np.random.Generator) -> Instance | None:
+    """Apply `perturbation` to `instance` (set in the current scene) and check the result is a valid test.
+
+    Returns None when the perturbation does not apply, when the task cannot ground the result in
+    its scene (a target off the board, a missing object), or when the expected behaviour is
+    already achieved there (a trial the robot would pass by doing nothing).
+    """
+    out = perturbation.apply(instance, rng)
+    if out is None:
+        return None
+    if perturbation.axis in ("L", "LB") and out.scene != instance.scene:
+        raise ValueError(f"language perturbation {perturbation.name!r} changed the scene")
+    out = task.rebase(out, out.scene)
+    if out is None or task.is_achieved(out, out.scene):
+        return None
+    return out.derive(
+        id=f"{instance.base_id}/{perturbation.name}",
+        base_id=instance.base_id,
+        perturbation=perturbation.name,
+    )

@@ -1,0 +1,66 @@
+"""Staging: the concrete instance a planned trial runs, given the scene the robot left behind."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lerobot_contrast.contrast.cost import moved_objects
+from lerobot_contrast.contrast.instance import Instance
+from lerobot_contrast.contrast.perturbation import perturb
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.contrast.strategy import PlannedTrial
+from lerobot_contrast.contrast.task import Task
+
+
+@dataclass(frozen=True)
+class Staged:
+    """A materialised trial: the instance to run (None if not applicable) and how it was staged."""
+
+    instance: Instance | None
+    staging: str  # "reset" | "in_place" | "not_applicable"
+
+
+def trial_rng(seed: int, index: int) -> np.random.Generator:
+    """Per-trial randomness, independent of history, so a resumed run draws exactly what it would have."""
+    return np.random.default_rng([seed, index])
+
+
+def materialize(
+    trial: PlannedTrial, task: Task, current: Scene, previous: Staged | None, rng: np.random.Generator
+) -> Staged:
+    """The instance `trial` runs when the robot left the scene as `current`."""
+    if trial.repeat > 0 and previous is not None:
+        return previous
+    if trial.staging == "reset" or previous is None:  # the session's first scene is always staged in full
+        return Staged(trial.base, "reset")
+    if trial.perturbation is None:
+        here = task.rebase(trial.base, current)
+        if here is None or task.is_achieved(here, current):
+            return Staged(trial.base, "reset")
+        return Staged(here, "in_place")
+    perturbation = task.perturbations.get(trial.perturbation)
+    perturbed = perturb(task, perturbation, trial.base.derive(scene=current), rng)
+    if perturbed is None:
+        return Staged(None, "not_applicable")
+    return Staged(perturbed, "in_place")
+
+
+@dataclass(frozen=True)
+class Move:
+    """One object the operator moves before a trial."""
+
+    name: str
+    start: Pose | None
+    end: Pose | None
+    distance: float
+
+
+def staging_moves(current: Scene, target: Scene, tolerance: float = 0.005) -> list[Move]:
+    """What the operator must move to go from `current` to `target`, largest move first."""
+    moves = [
+        Move(name, current.objects.get(name), target.objects.get(name), distance)
+        for name, distance in moved_objects(current, target, tolerance).items()
+    ]
+    return sorted(moves, key=lambda m: -m.distance)

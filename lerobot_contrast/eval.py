@@ -1,0 +1,141 @@
+"""`python -m lerobot_contrast.eval`: plan, run, record and summarise a contrast-set evaluation."""
+
+from __future__ import annotations
+
+import sys
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config
+from lerobot_contrast.console import plan_lines, trial_line
+from lerobot_contrast.contrast.cost import make_cost_model
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
+from lerobot_contrast.evaluate import LoopState, assume_unchanged, check_budget, run_trials
+from lerobot_contrast.record.results import write_results
+from lerobot_contrast.record.run_dir import RunDir, open_run_dir
+from lerobot_contrast.record.summary import format_summary, summarize
+from lerobot_contrast.tasks import make_task
+
+
+def validate(cfg: EvalConfig) -> None:
+    if cfg.n_instances < 1:
+        raise ConfigError(f"--n_instances must be at least 1, got {cfg.n_instances}")
+    if cfg.max_episode_steps < 1:
+        raise ConfigError(f"--max_episode_steps must be at least 1, got {cfg.max_episode_steps}")
+    if cfg.resume and cfg.output_dir is None:
+        raise ConfigError("--resume needs --output_dir naming the run directory to continue")
+    if cfg.perturbations is not None and cfg.strategy != "contrast":
+        raise ConfigError(f"--perturbations only applies to --strategy=contrast, not {cfg.strategy!r}")
+
+
+def build_plan(cfg: EvalConfig) -> tuple[Any, list[PlannedTrial]]:
+    """The task and the ordered trials; depends only on the config, so a resumed run rebuilds the same plan."""
+    task = make_task(cfg.task, families=cfg.families)
+    perturbations = task.perturbations.select(cfg.perturbations) if cfg.strategy == "contrast" else []
+    rng = np.random.default_rng(cfg.seed)
+    instances = task.sample(cfg.n_instances, rng)
+    return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng)
+
+
+def default_output_dir(cfg: EvalConfig) -> Path:
+    now = datetime.now()
+    return Path("outputs/contrast") / now.strftime("%Y-%m-%d") / f"{now:%H-%M-%S}_{cfg.task}_{cfg.strategy}"
+
+
+def make_runner(cfg: EvalConfig, task: Any, plan: list[PlannedTrial]):
+    import gymnasium as gym
+
+    import lerobot_contrast.sims  # noqa: F401  (registers the simulators)
+    from lerobot_contrast.policies import OraclePolicy, RandomPolicy
+    from lerobot_contrast.runners.sim import SimRunner
+    from lerobot_contrast.sims.language_table.oracle import reference_path
+    from lerobot_contrast.tasks import SIM_IDS
+
+    env = gym.make(SIM_IDS[cfg.task], obs_type="state", max_episode_steps=cfg.max_episode_steps)
+    bases = {trial.base.id: trial.base for trial in plan}
+    if cfg.policy.type == "oracle":
+        policy = OraclePolicy(env, task, bases, cfg.policy.noise_std, cfg.policy.language_blind)
+    elif cfg.policy.type == "random":
+        policy = RandomPolicy()
+    else:
+        raise ConfigError(f"--policy.type: unknown policy {cfg.policy.type!r}; choose from: oracle, random")
+
+    def reference(instance):
+        return reference_path(task, instance, max_steps=cfg.max_episode_steps).length_m
+
+    return SimRunner(env, policy, cfg.max_episode_steps, reference)
+
+
+def dry_run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any) -> None:
+    initial = task.storage_scene()
+    records = list(run_trials(plan, task, cost_model, cfg.budget, cfg.seed, LoopState(initial), assume_unchanged))
+    print("\n".join(plan_lines(records, initial, cost_model.unit)))
+    done = [r for r in records if r.status == "done"]
+    total = done[-1].cumulative_cost if done else 0.0
+    print(
+        f"plan: {len(done)} trials ({len(records) - len(done)} not applicable) of {len(plan)} planned, "
+        f"planned cost {total:.2f} {cost_model.unit} (assuming the robot leaves every scene as staged)"
+    )
+
+
+def run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir) -> dict[str, Any]:
+    execute = make_runner(cfg, task, plan)
+    records = run_dir.journal.records
+    state = LoopState.resume(records, task.storage_scene())
+    if records:
+        print(f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {cost_model.unit} spent)")
+    settings = {"task": cfg.task, "strategy": cfg.strategy, "policy": cfg.policy.type, "seed": cfg.seed,
+                "cost_unit": cost_model.unit, "budget": cfg.budget, "planned_trials": len(plan)}
+    complete = False
+    try:
+        for record in run_trials(plan, task, cost_model, cfg.budget, cfg.seed, state, execute):
+            run_dir.journal.append(record)
+            print(trial_line(record, cost_model.unit), flush=True)
+        complete = True
+    finally:
+        summary = summarize(run_dir.journal.records, settings=settings, complete=complete)
+        metadata = {k: str(v) for k, v in settings.items()}
+        write_results(run_dir.results_path, run_dir.journal.records, metadata)
+        run_dir.write_summary(summary)
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        cfg = parse_config(EvalConfig, argv)
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    try:
+        validate(cfg)
+        task, plan = build_plan(cfg)
+        cost_model = make_cost_model(cfg.cost)
+        check_budget(plan, task, cost_model, cfg.budget, cfg.seed, task.storage_scene())
+        if cfg.dry_run:
+            dry_run(cfg, task, plan, cost_model)
+            return 0
+        output_dir = cfg.output_dir or default_output_dir(cfg)
+        cfg.output_dir = output_dir
+        run_dir = open_run_dir(output_dir, config_json(cfg), cfg.resume)
+        summary = run(cfg, task, plan, cost_model, run_dir)
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(
+            f"\ninterrupted: every finished trial is in {cfg.output_dir}/journal.jsonl; continue with "
+            f"--output_dir={cfg.output_dir} --resume=true",
+            file=sys.stderr,
+        )
+        return 130
+    print(format_summary(summary, cost_model.unit))
+    print(f"run directory: {run_dir.path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Run directories: the append-only journal, the results table and the summary."""

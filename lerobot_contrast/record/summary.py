@@ -1,0 +1,77 @@
+"""The run summary (`summary.json`) and its console table: trials, cost and mean metrics per perturbation."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from typing import Any, Iterable
+
+from lerobot_contrast.contrast.trial import TrialRecord
+
+SUMMARY_VERSION = 1
+ORIGINAL = "original"
+
+
+def _mean(values: list[float]) -> float | None:
+    return sum(values) / len(values) if values else None
+
+
+def _group_stats(records: list[TrialRecord]) -> dict[str, Any]:
+    done = [r for r in records if r.status == "done"]
+    return {
+        "trials": len(done),
+        "not_applicable": sum(r.status == "not_applicable" for r in records),
+        "success_rate": _mean([float(bool(r.success)) for r in done]),
+        "spl": _mean([r.spl for r in done if r.spl is not None]),
+        "progress": _mean([r.progress for r in done if r.progress is not None]),
+        "cost": sum(r.cost for r in done),
+    }
+
+
+def summarize(records: Iterable[TrialRecord], *, settings: dict[str, Any], complete: bool) -> dict[str, Any]:
+    records = list(records)
+    by_perturbation: dict[str, list[TrialRecord]] = defaultdict(list)
+    by_family: dict[str, list[TrialRecord]] = defaultdict(list)
+    for record in records:
+        by_perturbation[record.perturbation or ORIGINAL].append(record)
+        by_family[record.family].append(record)
+    done = [r for r in records if r.status == "done"]
+    return {
+        "version": SUMMARY_VERSION,
+        "complete": complete,
+        "settings": settings,
+        "overall": {
+            **_group_stats(records),
+            "cumulative_cost": done[-1].cumulative_cost if done else 0.0,
+            "wall_time_s": sum(r.duration_s or 0.0 for r in done),
+        },
+        "per_perturbation": {name: _group_stats(group) for name, group in by_perturbation.items()},
+        "per_family": {name: _group_stats(group) for name, group in sorted(by_family.items())},
+    }
+
+
+def _fmt(value: float | None, pattern: str = "{:.3f}") -> str:
+    return "-" if value is None else pattern.format(value)
+
+
+def format_summary(summary: dict[str, Any], unit: str) -> str:
+    """A plain-text table: one row per perturbation (the original instances first), then the total."""
+    header = f"{'perturbation':<14}{'trials':>7}{'n/a':>6}{'success':>9}{'SPL':>8}{'cost (' + unit + ')':>12}"
+    lines = [header, "-" * len(header)]
+    rows = summary["per_perturbation"]
+    names = [ORIGINAL] + [name for name in rows if name != ORIGINAL]
+    for name in names:
+        if name not in rows:
+            continue
+        label = name if name == ORIGINAL else f"Δ{name}"
+        s = rows[name]
+        lines.append(
+            f"{label:<14}{s['trials']:>7}{s['not_applicable']:>6}{_fmt(s['success_rate']):>9}"
+            f"{_fmt(s['spl']):>8}{_fmt(s['cost'], '{:.2f}'):>12}"
+        )
+    total = summary["overall"]
+    lines.append("-" * len(header))
+    lines.append(
+        f"{'all':<14}{total['trials']:>7}{total['not_applicable']:>6}{_fmt(total['success_rate']):>9}"
+        f"{_fmt(total['spl']):>8}{_fmt(total['cumulative_cost'], '{:.2f}'):>12}"
+    )
+    return "\n".join(lines)

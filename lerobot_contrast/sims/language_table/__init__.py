@@ -1,0 +1,1 @@
+"""The Language-Table-compatible tabletop: pymunk physics, benchmark-camera renderer, gymnasium env, push oracle."""

@@ -1,0 +1,85 @@
+import json
+import pytest
+
+from lerobot_contrast.contrast.instance import Instance
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.contrast.trial import TrialRecord
+from lerobot_contrast.record.journal import Journal, JournalError
+from lerobot_contrast.record.run_dir import RunDirError, open_run_dir
+
+
+def record(index, perturbation=None):
+    scene = Scene({"red_moon": Pose(0.3, 0.1, 0.5)}, robot=Pose(0.3, 0.0))
+    instance = Instance(f"lt-{index}", "block2block", "push the red moon", scene, {"block": "red_moon"})
+    return TrialRecord(
+        index=index, base_id=instance.id, perturbation=perturbation, axis=None, family="block2block",
+        staging="reset", repeat=0, status="done", instance=instance, cost=0.25, cumulative_cost=0.25 * (index + 1),
+        success=True, spl=0.9, steps=12, scene_after=scene,
+    )
+
+
+def test_records_round_trip_through_the_journal(tmp_path):
+    journal = Journal.open(tmp_path / "journal.jsonl")
+    journal.append(record(0))
+    journal.append(record(1, "LB1"))
+    again = Journal.open(tmp_path / "journal.jsonl")
+    assert again.records == [record(0), record(1, "LB1")]
+    first = json.loads((tmp_path / "journal.jsonl").read_text().splitlines()[0])
+    assert first["version"] == 1 and first["instance"]["scene"]["objects"]["red_moon"] == [0.3, 0.1, 0.5]
+
+
+def test_a_torn_last_line_from_a_killed_run_is_dropped_and_the_file_repaired(tmp_path):
+    path = tmp_path / "journal.jsonl"
+    journal = Journal.open(path)
+    journal.append(record(0))
+    complete = path.read_bytes()
+    path.write_bytes(complete + json.dumps({"version": 1, **record(1).to_json()}).encode()[:57])
+    again = Journal.open(path)
+    assert again.records == [record(0)]
+    assert path.read_bytes() == complete
+    again.append(record(1))
+    assert Journal.open(path).records == [record(0), record(1)]
+
+
+def test_damage_before_the_last_line_is_an_error_not_silently_dropped(tmp_path):
+    path = tmp_path / "journal.jsonl"
+    path.write_text("{not json\n" + json.dumps({"version": 1, **record(0).to_json()}) + "\n")
+    with pytest.raises(JournalError, match="line 1 is not valid JSON"):
+        Journal.open(path)
+
+
+def test_a_journal_from_another_format_version_is_refused(tmp_path):
+    path = tmp_path / "journal.jsonl"
+    path.write_text(json.dumps({"version": 99, **record(0).to_json()}) + "\n")
+    with pytest.raises(JournalError, match="journal version 99"):
+        Journal.open(path)
+
+
+def test_records_must_arrive_in_plan_order(tmp_path):
+    journal = Journal.open(tmp_path / "journal.jsonl")
+    with pytest.raises(JournalError, match="expected trial 0, got 3"):
+        journal.append(record(3))
+
+
+def test_an_existing_run_is_not_overwritten_without_resume(tmp_path):
+    run = tmp_path / "run"
+    open_run_dir(run, {"seed": 0}, resume=False)
+    with pytest.raises(RunDirError, match="already exists; pass --resume=true"):
+        open_run_dir(run, {"seed": 0}, resume=False)
+    assert open_run_dir(run, {"seed": 0, "resume": True}, resume=True).path == run
+
+
+def test_resume_refuses_changed_settings_and_missing_runs(tmp_path):
+    run = tmp_path / "run"
+    open_run_dir(run, {"seed": 0, "budget": 5.0}, resume=False)
+    with pytest.raises(RunDirError, match=r"different settings \(budget\)"):
+        open_run_dir(run, {"seed": 0, "budget": 9.0}, resume=True)
+    with pytest.raises(RunDirError, match="holds no run to resume"):
+        open_run_dir(tmp_path / "nothing", {"seed": 0}, resume=True)
+
+
+def test_an_unwritable_output_dir_names_the_flag(tmp_path):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    with pytest.raises(RunDirError, match=r"--output_dir: cannot write to .*a_file/run \(Not a directory\)"):
+        open_run_dir(blocker / "run", {"seed": 0}, resume=False)

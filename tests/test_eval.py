@@ -1,0 +1,115 @@
+"""End to end: `python -m lerobot_contrast.eval` in the simulator, kill-and-resume, and bad-input messages."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+
+from lerobot_contrast.eval import main
+
+SMALL = ["--n_instances=3", "--seed=5", "--policy.noise_std=0.005"]
+TIMING = ("duration_s", "started_at")
+
+
+def journal(run: Path) -> list[dict]:
+    lines = (run / "journal.jsonl").read_text().splitlines()
+    return [{k: v for k, v in json.loads(line).items() if k not in TIMING} for line in lines]
+
+
+def cli(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "lerobot_contrast.eval", *args], capture_output=True, text=True, timeout=timeout
+    )
+
+
+def test_a_contrast_run_writes_a_complete_run_directory(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert main([*SMALL, f"--output_dir={run}"]) == 0
+    records = journal(run)
+    assert [r["index"] for r in records] == list(range(len(records)))
+    assert {r["perturbation"] for r in records} == {None, "L", "LB1", "LB2", "S", "SB1", "SB2"}
+    table = pq.read_table(run / "results.parquet")
+    assert table.num_rows == len(records)
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["complete"] is True and summary["overall"]["trials"] == sum(r["status"] == "done" for r in records)
+    assert summary["per_perturbation"]["original"]["trials"] == 3
+    assert json.loads((run / "config.json").read_text())["strategy"] == "contrast"
+    out = capsys.readouterr().out
+    assert "ΔLB2" in out and "success" in out
+    done = [r for r in records if r["status"] == "done"]
+    assert all(0.0 <= r["spl"] <= 1.0 and r["reference_length"] > 0 for r in done)
+    assert all(r["cost"] == 0.0 for r in done if r["axis"] in ("L", "LB"))
+
+
+def test_a_killed_run_resumes_without_losing_or_repeating_a_trial(tmp_path):
+    reference, killed = tmp_path / "reference", tmp_path / "killed"
+    assert main([*SMALL, f"--output_dir={reference}"]) == 0
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lerobot_contrast.eval", *SMALL, f"--output_dir={killed}"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        path = killed / "journal.jsonl"
+        if path.exists() and path.read_text().count("\n") >= 4:
+            break
+        time.sleep(0.01)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    partial = len(journal(killed))
+    assert 4 <= partial < len(journal(reference))
+    result = cli(*SMALL, f"--output_dir={killed}", "--resume=true")
+    assert result.returncode == 0, result.stderr
+    assert f"resuming {killed} at trial {partial}" in result.stdout
+    assert journal(killed) == journal(reference)
+
+
+def test_the_same_seed_gives_the_same_results(tmp_path):
+    assert main([*SMALL, "--strategy=standard", f"--output_dir={tmp_path / 'a'}"]) == 0
+    assert main([*SMALL, "--strategy=standard", f"--output_dir={tmp_path / 'b'}"]) == 0
+    assert journal(tmp_path / "a") == journal(tmp_path / "b")
+
+
+def test_dry_run_prints_the_staging_and_writes_nothing(tmp_path, capsys):
+    assert main(["--n_instances=2", "--dry_run=true", f"--output_dir={tmp_path / 'run'}"]) == 0
+    out = capsys.readouterr().out
+    assert "move red_moon" in out or "move " in out
+    assert "planned cost" in out
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--perturbations=[LB9]"], "unknown perturbation 'LB9' for task 'language_table'; choose from: L, LB1"),
+        (["--budget=0.01"], "--budget 0.01 m is below the cost of staging the first trial"),
+        (["--strategy=iid"], "--strategy: unknown strategy 'iid'"),
+        (["--n_instance=3"], "unknown flag --n_instance"),
+        (["--budget=lots"], "invalid flag value"),
+        (["--resume=true"], "--resume needs --output_dir"),
+    ],
+)
+def test_bad_input_gets_one_line_naming_the_flag(args, message):
+    result = cli(*args, "--dry_run=true")
+    assert result.returncode == 2
+    assert result.stderr.count("\n") == 1 and message in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_an_existing_run_directory_needs_resume_and_an_unwritable_one_is_named(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "config.json").write_text("{}")
+    result = cli("--n_instances=1", f"--output_dir={run}")
+    assert result.returncode == 2 and "already exists; pass --resume=true" in result.stderr
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = cli("--n_instances=1", f"--output_dir={blocker / 'run'}")
+    assert result.returncode == 2 and "--output_dir: cannot write to" in result.stderr
+    assert result.stderr.count("\n") == 1
