@@ -6,7 +6,7 @@ import dataclasses
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import draccus
 
@@ -39,7 +39,7 @@ class EvalConfig:
     # task's), e.g. [LB1,LB2,SB1,SB2].
     perturbations: list[str] | None = None
     # Number of i.i.d. base instances sampled for the evaluation set.
-    n_instances: int = 25
+    n_instances: int = 50
     # Times each planned trial is run (restaging the same scene between repeats).
     repeats: int = 1
     # Experimenter-cost budget K in the cost model's unit; the run stops once the cumulative cost exceeds
@@ -65,9 +65,6 @@ class ConfigError(UserError):
     pass
 
 
-T = TypeVar("T")
-
-
 def _flag_names(cls: type, prefix: str = "") -> set[str]:
     names = set()
     for f in dataclasses.fields(cls):
@@ -79,7 +76,7 @@ def _flag_names(cls: type, prefix: str = "") -> set[str]:
     return names
 
 
-def parse_config(cls: type[T], argv: list[str] | None = None) -> T:
+def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
     """Parse LeRobot-style `--name=value` flags, turning any mistake into a one-line ConfigError."""
     argv = list(sys.argv[1:] if argv is None else argv)
     known = _flag_names(cls) | {"config_path", "help", "h"}

@@ -30,7 +30,9 @@ def plan_lines(records: list[TrialRecord], initial_scene: Scene, unit: str) -> l
     scene = initial_scene
     for record in records:
         if record.status != "done" or record.instance is None:
-            lines.append(f"[{record.index:>4}] {label(record.perturbation):<9} {record.base_id}: not applicable, skipped")
+            lines.append(
+                f"[{record.index:>4}] {label(record.perturbation):<9} {record.base_id}: not applicable, skipped"
+            )
             continue
         target = record.instance.scene
         lines.append(

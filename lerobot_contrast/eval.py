@@ -87,9 +87,18 @@ def run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, r
     records = run_dir.journal.records
     state = LoopState.resume(records, task.storage_scene())
     if records:
-        print(f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {cost_model.unit} spent)")
-    settings = {"task": cfg.task, "strategy": cfg.strategy, "policy": cfg.policy.type, "seed": cfg.seed,
-                "cost_unit": cost_model.unit, "budget": cfg.budget, "planned_trials": len(plan)}
+        print(
+            f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {cost_model.unit} spent)"
+        )
+    settings = {
+        "task": cfg.task,
+        "strategy": cfg.strategy,
+        "policy": cfg.policy.type,
+        "seed": cfg.seed,
+        "cost_unit": cost_model.unit,
+        "budget": cfg.budget,
+        "planned_trials": len(plan),
+    }
     complete = False
     try:
         for record in run_trials(plan, task, cost_model, cfg.budget, cfg.seed, state, execute):

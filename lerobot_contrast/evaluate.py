@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Callable, Iterator
 
 import numpy as np
 
@@ -45,8 +45,9 @@ class LoopState:
         return state
 
 
-def check_budget(plan: list[PlannedTrial], task: Task, cost_model: CostModel, budget: float | None, seed: int,
-                 initial_scene: Scene) -> None:
+def check_budget(
+    plan: list[PlannedTrial], task: Task, cost_model: CostModel, budget: float | None, seed: int, initial_scene: Scene
+) -> None:
     """Refuse a budget that cannot pay for staging the first trial."""
     if budget is None or not plan:
         return
@@ -144,4 +145,3 @@ def _scored(
 def assume_unchanged(instance: Instance, rng: np.random.Generator) -> Outcome:
     """A dry-run stand-in for execution: the robot leaves the scene exactly as it was staged."""
     return Outcome(success=False, steps=0, path_length=0.0, scene_after=instance.scene, duration_s=0.0)
-

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Protocol
+from collections.abc import Mapping
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -34,8 +35,9 @@ class OraclePolicy:
 
     name = "oracle"
 
-    def __init__(self, env: Any, task: Any, bases: Mapping[str, Instance], noise_std: float = 0.0,
-                 language_blind: float = 0.0) -> None:
+    def __init__(
+        self, env: Any, task: Any, bases: Mapping[str, Instance], noise_std: float = 0.0, language_blind: float = 0.0
+    ) -> None:
         from lerobot_contrast.sims.language_table.oracle import PushOracle
 
         if noise_std < 0:

@@ -52,7 +52,8 @@ def test_a_killed_run_resumes_without_losing_or_repeating_a_trial(tmp_path):
     assert main([*SMALL, f"--output_dir={reference}"]) == 0
     proc = subprocess.Popen(
         [sys.executable, "-m", "lerobot_contrast.eval", *SMALL, f"--output_dir={killed}"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
     )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:

@@ -1,8 +1,8 @@
+import pytest
+
 from lerobot_contrast.contrast.cost import DistanceCost, ResetTimeCost, make_cost_model
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
-
-import pytest
 
 
 def scene(**objects):

@@ -14,7 +14,9 @@ from .toy_task import ToyTask
 
 def bases(n, side="right"):
     return [
-        Instance(f"toy-{k}", "push", f"push a {side}", Scene({"a": Pose(0.0, 0.0), "b": Pose(0.5, float(k))}), {"side": side})
+        Instance(
+            f"toy-{k}", "push", f"push a {side}", Scene({"a": Pose(0.0, 0.0), "b": Pose(0.5, float(k))}), {"side": side}
+        )
         for k in range(n)
     ]
 
@@ -25,7 +27,9 @@ def pusher(to: str | None = None):
     def execute(instance, rng):
         side = to or instance.goal["side"]
         after = instance.scene.with_object("a", Pose(0.15 if side == "right" else -0.15, 0.0))
-        return Outcome(success=ToyTask().is_achieved(instance, after), steps=1, path_length=0.15, scene_after=after, duration_s=0.0)
+        return Outcome(
+            success=ToyTask().is_achieved(instance, after), steps=1, path_length=0.15, scene_after=after, duration_s=0.0
+        )
 
     return execute
 
@@ -41,8 +45,12 @@ def test_contrast_runs_each_base_then_its_perturbations_without_resetting():
     task = ToyTask()
     records = run(task, "contrast", bases(2), ["LB", "SB"])
     assert [(r.base_id, r.perturbation, r.staging) for r in records] == [
-        ("toy-0", None, "reset"), ("toy-0", "LB", "in_place"), ("toy-0", "SB", "in_place"),
-        ("toy-1", None, "reset"), ("toy-1", "LB", "in_place"), ("toy-1", "SB", "in_place"),
+        ("toy-0", None, "reset"),
+        ("toy-0", "LB", "in_place"),
+        ("toy-0", "SB", "in_place"),
+        ("toy-1", None, "reset"),
+        ("toy-1", "LB", "in_place"),
+        ("toy-1", "SB", "in_place"),
     ]
     costs = [r.cost for r in records]
     # storage -> base 0 moves a and b by 1 m each; the language perturbation is free; SB recentres a (0.15 m);

@@ -1,4 +1,5 @@
 import json
+
 import pytest
 
 from lerobot_contrast.contrast.instance import Instance
@@ -12,9 +13,21 @@ def record(index, perturbation=None):
     scene = Scene({"red_moon": Pose(0.3, 0.1, 0.5)}, robot=Pose(0.3, 0.0))
     instance = Instance(f"lt-{index}", "block2block", "push the red moon", scene, {"block": "red_moon"})
     return TrialRecord(
-        index=index, base_id=instance.id, perturbation=perturbation, axis=None, family="block2block",
-        staging="reset", repeat=0, status="done", instance=instance, cost=0.25, cumulative_cost=0.25 * (index + 1),
-        success=True, spl=0.9, steps=12, scene_after=scene,
+        index=index,
+        base_id=instance.id,
+        perturbation=perturbation,
+        axis=None,
+        family="block2block",
+        staging="reset",
+        repeat=0,
+        status="done",
+        instance=instance,
+        cost=0.25,
+        cumulative_cost=0.25 * (index + 1),
+        success=True,
+        spl=0.9,
+        steps=12,
+        scene_after=scene,
     )
 
 

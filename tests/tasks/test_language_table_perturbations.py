@@ -6,7 +6,6 @@ import itertools
 
 import numpy as np
 import pytest
-from lt_helpers import ABS_WORDS, B2B_WORDS, B2BREL_WORDS, REL_WORDS, SEP_WORDS, make, scene
 
 from lerobot_contrast.contrast.perturbation import perturb
 from lerobot_contrast.contrast.scene import Pose
@@ -14,6 +13,8 @@ from lerobot_contrast.tasks.language_table import LanguageTableTask, board, geom
 from lerobot_contrast.tasks.language_table import families as fam
 from lerobot_contrast.tasks.language_table.perturbations import KEEP_CLEAR, MIN_MOVE
 from lerobot_contrast.tasks.language_table.wording import render
+
+from .lt_helpers import ABS_WORDS, B2B_WORDS, B2BREL_WORDS, REL_WORDS, SEP_WORDS, make, scene
 
 TASK = LanguageTableTask()
 P = {p.name: p for p in TASK.perturbations}

@@ -24,7 +24,8 @@ OBS_TYPES = ("rgb", "state")
 def _observation_space(obs_type: str) -> spaces.Dict:
     (x_min, y_min), (x_max, y_max) = board.WORKSPACE_BOUNDS
     # The benchmark declares the translations inside the workspace widened by 0.1 m.
-    low, high = np.array([x_min - 0.1, y_min - 0.1]), np.array([x_max + 0.1, y_max + 0.1])
+    low = np.array([x_min - 0.1, y_min - 0.1], dtype=np.float32)
+    high = np.array([x_max + 0.1, y_max + 0.1], dtype=np.float32)
     fields = {
         "effector_translation": spaces.Box(low, high, (2,), np.float32),
         "effector_target_translation": spaces.Box(low, high, (2,), np.float32),
@@ -56,7 +57,7 @@ class LanguageTableEnv(gym.Env):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"unknown render_mode {render_mode!r}; choose None or 'rgb_array'")
         self.block_mode, self.obs_type, self.render_mode, self.family = block_mode, obs_type, render_mode, family
-        self.task_model = LanguageTableTask(block_mode=block_mode)
+        self.task_model = LanguageTableTask(block_mode=block_mode, families=None if family is None else (family,))
         self.observation_space = _observation_space(obs_type)
         self.action_space = spaces.Box(-board.MAX_ACTION, board.MAX_ACTION, (2,), np.float32)
         self._max_episode_steps = board.MAX_EPISODE_STEPS
@@ -87,11 +88,7 @@ class LanguageTableEnv(gym.Env):
 
     def _sample_instance(self, seed: int | None) -> Instance:
         rng = np.random.default_rng(seed if seed is not None else self.np_random.integers(2**63))
-        for _ in range(1000):
-            (instance,) = self.task_model.sample(1, rng)
-            if self.family in (None, instance.family):
-                return instance
-        raise ValueError(f"could not sample an instance of family {self.family!r} in block mode {self.block_mode!r}")
+        return self.task_model.sample(1, rng)[0]
 
     def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
         self.physics.step(action)
@@ -128,4 +125,3 @@ class LanguageTableEnv(gym.Env):
             blocks, effector = self.physics.state()
             self._frame = self._renderer.render(blocks, effector)
         return self._frame
-

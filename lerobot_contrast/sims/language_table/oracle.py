@@ -21,8 +21,11 @@ from lerobot_contrast.sims.language_table.physics import TabletopPhysics
 from lerobot_contrast.tasks.language_table.board import MAX_ACTION, MAX_EPISODE_STEPS, WORKSPACE_BOUNDS
 
 PRE_PUSH_BACKOFFS = (0.05, 0.06, 0.07, 0.08)  # effector starts a push this far behind the block (benchmark's)
-EFFECTOR_CLEARANCE = 0.047  # effector centre to block centres while travelling (radii 0.028 + 0.0127 + margin)
-BLOCK_CLEARANCE = 0.06  # pushed-block centre to other block centres along its path
+# Centre distances kept while travelling, loosest first: effector to blocks (radii 0.028 + 0.0127 + margin)
+# and pushed block to other blocks (two radii + margin; the tighter value lets a block brush past).
+EFFECTOR_CLEARANCES = (0.047, 0.04)
+BLOCK_CLEARANCES = (0.06, 0.05)
+DETOUR_INSET = 0.02  # detours keep this far inside the workspace, so the effector can still follow
 ALIGN_ENTER, ALIGN_LEAVE = 0.006, 0.01  # lateral offset of the effector from the push line (hysteresis)
 PUSH_REACH = PRE_PUSH_BACKOFFS[-1] + 0.01  # pushing goes on while the block is at most this far ahead
 AIM_BEHIND = 0.01  # the pusher aims this far behind the block centre, i.e. into the block
@@ -30,6 +33,8 @@ LOOKAHEAD = 0.03  # the block is pushed towards the point this far along its pla
 GOAL_TOLERANCE = 0.005
 PUSH_SPEED, APPROACH_SPEED = 0.035, 0.03  # metres per 10 Hz step (0.35 and 0.3 m/s)
 SLOWDOWN = ((0.02, 0.2), (0.04, 0.3), (0.06, 0.4), (0.08, 0.5), (0.1, 0.6))  # (block-goal distance, speed factor)
+# Push directions tried when the effector cannot stand behind the block: 15° turns up to ±90°, nearest first.
+PUSH_TURNS = tuple(sign * k * math.pi / 12 for k in range(7) for sign in (1, -1))[1:]
 RING_VERTICES = 8
 RING_SCALE = 1.0 / math.cos(math.pi / RING_VERTICES) + 0.01  # polygon edges then stay outside the circle
 
@@ -52,11 +57,12 @@ def _inside_workspace(points: np.ndarray, inset: float) -> np.ndarray:
 
 def _segments_clear(a: np.ndarray, b: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> np.ndarray:
     """For segment endpoints a, b (..., 2): whether each segment keeps outside every obstacle circle."""
-    d = (b - a)[..., None, :]
-    to_c = centres - a[..., None, :]
-    t = np.clip((to_c * d).sum(-1) / np.maximum((d * d).sum(-1), 1e-18), 0.0, 1.0)
-    gap = to_c - t[..., None] * d
-    return ((gap * gap).sum(-1) >= (radii * (1 - 1e-6)) ** 2).all(-1)
+    # x and y kept apart: numpy reductions over a length-2 axis cost more than the arithmetic.
+    dx, dy = b[..., :1] - a[..., :1], b[..., 1:] - a[..., 1:]
+    cx, cy = centres[:, 0] - a[..., :1], centres[:, 1] - a[..., 1:]
+    t = np.clip((cx * dx + cy * dy) / np.maximum(dx * dx + dy * dy, 1e-18), 0.0, 1.0)
+    gx, gy = cx - t * dx, cy - t * dy
+    return (gx * gx + gy * gy >= (radii * (1 - 1e-6)) ** 2).all(-1)
 
 
 def _dijkstra(weights: np.ndarray, source: int, target: int) -> list[int] | None:
@@ -79,13 +85,12 @@ def _dijkstra(weights: np.ndarray, source: int, target: int) -> list[int] | None
     return order[::-1]
 
 
-def plan_path(
-    start: np.ndarray, goal: np.ndarray, centres: np.ndarray, radius: float, inset: float = 0.0
-) -> np.ndarray:
+def plan_path(start: np.ndarray, goal: np.ndarray, centres: np.ndarray, radius: float) -> np.ndarray | None:
     """Shortest polyline (K, 2) from start to goal around obstacle circles, via their circumscribed polygons.
 
     Circles that hold the start (or goal) only forbid getting closer to their centre on the first (last) leg,
-    so a path can leave a crowd and end next to a block. Detour vertices stay `inset` inside the workspace.
+    so a path can leave a crowd and end next to a block. Detours stay DETOUR_INSET inside the workspace.
+    None when no such path exists.
     """
     radii = np.full(len(centres), radius)
     from_start = np.minimum(radii, np.linalg.norm(centres - start, axis=1))
@@ -96,13 +101,24 @@ def plan_path(
     ring = np.stack((np.cos(angles), np.sin(angles)), axis=1)
     vertices = (centres[:, None, :] + radius * RING_SCALE * ring).reshape(-1, 2)
     outside = (np.linalg.norm(vertices[:, None, :] - centres, axis=2) >= radius).all(axis=1)
-    nodes = np.concatenate(([start, goal], vertices[outside & _inside_workspace(vertices, inset)]))
-    visible = _segments_clear(nodes[:, None, :], nodes[None, :, :], centres, radii)
+    nodes = np.concatenate(([start, goal], vertices[outside & _inside_workspace(vertices, DETOUR_INSET)]))
+    i, j = np.triu_indices(len(nodes), 1)
+    visible = np.zeros((len(nodes), len(nodes)), bool)
+    visible[i, j] = visible[j, i] = _segments_clear(nodes[i], nodes[j], centres, radii)
     visible[0] = _segments_clear(start, nodes, centres, from_start)
     visible[:, 1] = _segments_clear(nodes, goal, centres, to_goal)
     weights = np.where(visible, np.linalg.norm(nodes[:, None, :] - nodes[None, :, :], axis=2), np.inf)
     order = _dijkstra(weights, 0, 1)
-    return np.array((start, goal)) if order is None else nodes[order]
+    return None if order is None else nodes[order]
+
+
+def route(start: np.ndarray, goal: np.ndarray, centres: np.ndarray, clearances: tuple[float, ...]) -> np.ndarray:
+    """The path of the first clearance that admits one (tighter ones squeeze through gaps), else the straight line."""
+    for clearance in clearances:
+        path = plan_path(start, goal, centres, clearance)
+        if path is not None:
+            return path
+    return np.array((start, goal))
 
 
 def along(path: np.ndarray, distance: float) -> np.ndarray:
@@ -161,8 +177,8 @@ class PushOracle:
         if math.dist(block, goal) < GOAL_TOLERANCE:
             return np.zeros(2)
         others = list(blocks.values())
-        block_path = plan_path(block, goal, np.array(others).reshape(-1, 2), BLOCK_CLEARANCE, inset)
-        direction = _unit(along(block_path, LOOKAHEAD) - block)
+        block_path = route(block, goal, np.array(others).reshape(-1, 2), BLOCK_CLEARANCES)
+        direction, pre_push = _push_setup(block, _unit(along(block_path, LOOKAHEAD) - block), others)
         effector = np.asarray(effector_target_xy, dtype=float)
         rel = block - effector
         along_push, lateral = float(rel @ direction), abs(float(rel[0] * direction[1] - rel[1] * direction[0]))
@@ -171,18 +187,22 @@ class PushOracle:
         if self._pushing:
             aim = block - AIM_BEHIND * direction
             return _limit(aim - effector, PUSH_SPEED * _slowdown(math.dist(block, goal)))
-        pre_push = _pre_push_point(block, direction, others)
-        path = plan_path(effector, pre_push, np.array([*others, block]), EFFECTOR_CLEARANCE)
+        path = route(effector, pre_push, np.array([*others, block]), EFFECTOR_CLEARANCES)
         return along(path, APPROACH_SPEED) - effector
 
 
-def _pre_push_point(block: np.ndarray, direction: np.ndarray, others: list[np.ndarray]) -> np.ndarray:
-    """The first backoff behind the block that is clear of other blocks (else the nearest one)."""
-    for backoff in PRE_PUSH_BACKOFFS:
-        point = block - backoff * direction
-        if all(math.dist(point, xy) > EFFECTOR_CLEARANCE for xy in others):
-            return point
-    return block - PRE_PUSH_BACKOFFS[0] * direction
+def _push_setup(block: np.ndarray, direction: np.ndarray, others: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Push direction and pre-push point: the direction turned as little as needed (blocks at the board edge,
+    blocks crowded behind) for the effector to stand behind the block, on the board and clear of the others."""
+    for angle in PUSH_TURNS:
+        c, s = math.cos(angle), math.sin(angle)
+        turned = np.array((c * direction[0] - s * direction[1], s * direction[0] + c * direction[1]))
+        for backoff in PRE_PUSH_BACKOFFS:
+            point = block - backoff * turned
+            clear = all(math.dist(point, xy) > EFFECTOR_CLEARANCES[0] for xy in others)
+            if clear and _inside_workspace(point[None], 0.0)[0]:
+                return turned, point
+    return direction, block - PRE_PUSH_BACKOFFS[0] * direction
 
 
 def _slowdown(distance: float) -> float:

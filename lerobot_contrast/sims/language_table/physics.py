@@ -101,9 +101,9 @@ class TabletopPhysics:
         # position correction (max_bias 0) whose force is capped at the Coulomb limit.
         slide = pymunk.PivotJoint(space.static_body, body, (0.0, 0.0), (0.0, 0.0))
         spin = pymunk.GearJoint(space.static_body, body, 0.0, 1.0)
-        normal_force = BLOCK_FRICTION * TABLE_FRICTION * BLOCK_MASS * GRAVITY
-        slide.max_bias, slide.max_force = 0.0, normal_force
-        spin.max_bias, spin.max_force = 0.0, normal_force * _mean_radius(hull)
+        slide_limit = BLOCK_FRICTION * TABLE_FRICTION * BLOCK_MASS * GRAVITY
+        slide.max_bias, slide.max_force = 0.0, slide_limit
+        spin.max_bias, spin.max_force = 0.0, slide_limit * _mean_radius(hull)
         space.add(body, poly, slide, spin)
 
     def _read_poses(self) -> np.ndarray:
