@@ -113,37 +113,37 @@ def run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, r
     return summary
 
 
-def main(argv: list[str] | None = None) -> int:
+def evaluate(cfg: EvalConfig) -> int:
+    """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code."""
+    validate(cfg)
+    task, plan = build_plan(cfg)
+    cost_model = make_cost_model(cfg.cost)
+    check_budget(plan, task, cost_model, cfg.budget, cfg.seed, task.storage_scene())
+    if cfg.dry_run:
+        dry_run(cfg, task, plan, cost_model)
+        return 0
+    cfg.output_dir = cfg.output_dir or default_output_dir(cfg)
+    run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
     try:
-        cfg = parse_config(EvalConfig, argv)
-    except UserError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    try:
-        validate(cfg)
-        task, plan = build_plan(cfg)
-        cost_model = make_cost_model(cfg.cost)
-        check_budget(plan, task, cost_model, cfg.budget, cfg.seed, task.storage_scene())
-        if cfg.dry_run:
-            dry_run(cfg, task, plan, cost_model)
-            return 0
-        output_dir = cfg.output_dir or default_output_dir(cfg)
-        cfg.output_dir = output_dir
-        run_dir = open_run_dir(output_dir, config_json(cfg), cfg.resume)
         summary = run(cfg, task, plan, cost_model, run_dir)
-    except UserError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
         print(
-            f"\ninterrupted: every finished trial is in {cfg.output_dir}/journal.jsonl; continue with "
-            f"--output_dir={cfg.output_dir} --resume=true",
+            f"\ninterrupted: every finished trial is in {run_dir.journal.path}; continue with "
+            f"--output_dir={run_dir.path} --resume=true",
             file=sys.stderr,
         )
         return 130
     print(format_summary(summary, cost_model.unit))
     print(f"run directory: {run_dir.path}")
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        return evaluate(parse_config(EvalConfig, argv))
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

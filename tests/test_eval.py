@@ -14,6 +14,8 @@ import pytest
 from lerobot_contrast.eval import main
 
 SMALL = ["--n_instances=3", "--seed=5", "--policy.noise_std=0.005"]
+# Long enough (about 50 trials) that a signal sent after the fourth trial lands mid-run.
+LONGER = ["--n_instances=8", "--seed=5", "--policy.noise_std=0.005"]
 TIMING = ("duration_s", "started_at")
 
 
@@ -49,26 +51,46 @@ def test_a_contrast_run_writes_a_complete_run_directory(tmp_path, capsys):
 
 def test_a_killed_run_resumes_without_losing_or_repeating_a_trial(tmp_path):
     reference, killed = tmp_path / "reference", tmp_path / "killed"
-    assert main([*SMALL, f"--output_dir={reference}"]) == 0
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "lerobot_contrast.eval", *SMALL, f"--output_dir={killed}"],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        path = killed / "journal.jsonl"
-        if path.exists() and path.read_text().count("\n") >= 4:
-            break
-        time.sleep(0.01)
+    assert main([*LONGER, f"--output_dir={reference}"]) == 0
+    proc = start_and_wait(killed, 4)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
     partial = len(journal(killed))
     assert 4 <= partial < len(journal(reference))
-    result = cli(*SMALL, f"--output_dir={killed}", "--resume=true")
+    result = cli(*LONGER, f"--output_dir={killed}", "--resume=true")
     assert result.returncode == 0, result.stderr
     assert f"resuming {killed} at trial {partial}" in result.stdout
     assert journal(killed) == journal(reference)
+
+
+def start_and_wait(run: Path, lines: int) -> subprocess.Popen:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lerobot_contrast.eval", *LONGER, f"--output_dir={run}"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        path = run / "journal.jsonl"
+        if path.exists() and path.read_text().count("\n") >= lines:
+            break
+        time.sleep(0.01)
+    return proc
+
+
+def test_ctrl_c_keeps_every_finished_trial_and_marks_the_summary_incomplete(tmp_path):
+    run = tmp_path / "run"
+    proc = start_and_wait(run, 4)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert f"--output_dir={run} --resume=true" in stderr
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["complete"] is False
+    assert pq.read_table(run / "results.parquet").num_rows == len(journal(run)) >= 4
+    assert cli(*LONGER, f"--output_dir={run}", "--resume=true").returncode == 0
+    assert json.loads((run / "summary.json").read_text())["complete"] is True
 
 
 def test_the_same_seed_gives_the_same_results(tmp_path):
@@ -94,6 +116,7 @@ def test_dry_run_prints_the_staging_and_writes_nothing(tmp_path, capsys):
         (["--n_instance=3"], "unknown flag --n_instance"),
         (["--budget=lots"], "invalid flag value"),
         (["--resume=true"], "--resume needs --output_dir"),
+        (["--families=[block2nowhere]"], "--families: unknown Language-Table families ['block2nowhere']"),
     ],
 )
 def test_bad_input_gets_one_line_naming_the_flag(args, message):

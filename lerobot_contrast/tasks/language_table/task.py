@@ -6,6 +6,7 @@ from itertools import permutations
 
 import numpy as np
 
+from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
 from lerobot_contrast.contrast.scene import Pose, Scene
@@ -57,8 +58,9 @@ class LanguageTableTask:
         self.families = tuple(fam.FAMILIES if families is None else families)
         unknown = [f for f in self.families if f not in fam.FAMILIES]
         if unknown or not self.families:
-            raise ValueError(
-                f"unknown Language-Table families {unknown or '(none given)'}; choose from: {', '.join(fam.FAMILIES)}"
+            raise UserError(
+                f"--families: unknown Language-Table families {unknown or '(none given)'}; "
+                f"choose from: {', '.join(fam.FAMILIES)}"
             )
         self.id_prefix = id_prefix
         # A registry per task, so a user adding a perturbation to one task does not change the others.
