@@ -134,6 +134,11 @@ def evaluate(cfg: EvalConfig) -> int:
         )
         return 130
     print(format_summary(summary, cost_model.unit))
+    spent, ran = summary["overall"]["cumulative_cost"], len(run_dir.journal.records)
+    if cfg.budget is not None and spent > cfg.budget:
+        print(
+            f"stopped at the budget: {spent:.2f} of {cfg.budget:g} {cost_model.unit} spent, {ran} of {len(plan)} planned trials reached"
+        )
     print(f"run directory: {run_dir.path}")
     return 0
 

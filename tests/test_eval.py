@@ -137,3 +137,11 @@ def test_an_existing_run_directory_needs_resume_and_an_unwritable_one_is_named(t
     result = cli("--n_instances=1", f"--output_dir={blocker / 'run'}")
     assert result.returncode == 2 and "--output_dir: cannot write to" in result.stderr
     assert result.stderr.count("\n") == 1
+
+
+def test_the_run_stops_after_the_trial_that_exceeds_the_budget(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert main([*SMALL, "--budget=4", f"--output_dir={run}"]) == 0
+    records = [r for r in journal(run) if r["status"] == "done"]
+    assert records[-1]["cumulative_cost"] > 4 and all(r["cumulative_cost"] <= 4 for r in records[:-1])
+    assert "stopped at the budget" in capsys.readouterr().out
