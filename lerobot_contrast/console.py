@@ -2,13 +2,10 @@
 
 from __future__ import annotations
 
+from lerobot_contrast.contrast.perturbation import perturbation_label as label
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.trial import TrialRecord
-
-
-def label(perturbation: str | None) -> str:
-    return "original" if perturbation is None else f"Δ{perturbation}"
 
 
 def trial_line(record: TrialRecord, unit: str) -> str:

@@ -9,6 +9,7 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.instance import Instance
+from lerobot_contrast.sims.language_table.oracle import PushOracle
 from lerobot_contrast.tasks.language_table.board import MAX_ACTION
 
 
@@ -38,8 +39,6 @@ class OraclePolicy:
     def __init__(
         self, env: Any, task: Any, bases: Mapping[str, Instance], noise_std: float = 0.0, language_blind: float = 0.0
     ) -> None:
-        from lerobot_contrast.sims.language_table.oracle import PushOracle
-
         if noise_std < 0:
             raise UserError(f"--policy.noise_std must be >= 0, got {noise_std}")
         if not 0.0 <= language_blind <= 1.0:
@@ -49,8 +48,7 @@ class OraclePolicy:
         self.bases = bases
         self.noise_std = noise_std
         self.language_blind = language_blind
-        self._oracle_cls = PushOracle
-        self._oracle: Any = None
+        self._oracle: PushOracle | None = None
 
     def reset(self, instance: Instance, rng: np.random.Generator) -> None:
         goal: Instance | None = instance
@@ -61,7 +59,7 @@ class OraclePolicy:
                 goal = None
         self._oracle = None
         if goal is not None:
-            self._oracle = self._oracle_cls(self.task, noise_std=self.noise_std, rng=rng)
+            self._oracle = PushOracle(self.task, noise_std=self.noise_std, rng=rng)
             self._oracle.reset(goal)
 
     def act(self, observation: Mapping[str, Any]) -> np.ndarray:

@@ -40,8 +40,12 @@ class Perturbation:
 
     @property
     def label(self) -> str:
-        """The paper's notation, e.g. ΔLB1."""
-        return f"Δ{self.name}"
+        return perturbation_label(self.name)
+
+
+def perturbation_label(name: str | None) -> str:
+    """The paper's notation, e.g. ΔLB1; "original" for an unperturbed instance."""
+    return "original" if name is None else f"Δ{name}"
 
 
 class UnknownPerturbationError(UserError):

@@ -6,6 +6,7 @@ from collections import defaultdict
 from collections.abc import Iterable
 from typing import Any
 
+from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.trial import TrialRecord
 
 SUMMARY_VERSION = 1
@@ -63,7 +64,7 @@ def format_summary(summary: dict[str, Any], unit: str) -> str:
     for name in names:
         if name not in rows:
             continue
-        label = name if name == ORIGINAL else f"Δ{name}"
+        label = perturbation_label(None if name == ORIGINAL else name)
         s = rows[name]
         lines.append(
             f"{label:<14}{s['trials']:>7}{s['not_applicable']:>6}{_fmt(s['success_rate']):>9}"
