@@ -1,4 +1,6 @@
 import json
+import os
+import signal
 
 import pytest
 
@@ -39,6 +41,21 @@ def test_records_round_trip_through_the_journal(tmp_path):
     assert again.records == [record(0), record(1, "LB1")]
     first = json.loads((tmp_path / "journal.jsonl").read_text().splitlines()[0])
     assert first["version"] == 1 and first["instance"]["scene"]["objects"]["red_moon"] == [0.3, 0.1, 0.5]
+
+
+def test_ctrl_c_during_an_append_lands_after_the_record_is_in_file_and_memory(tmp_path, monkeypatch):
+    journal = Journal.open(tmp_path / "journal.jsonl")
+    real_fsync = os.fsync
+
+    def fsync_then_ctrl_c(fd):
+        real_fsync(fd)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(os, "fsync", fsync_then_ctrl_c)
+    with pytest.raises(KeyboardInterrupt):
+        journal.append(record(0))
+    assert journal.records == [record(0)]
+    assert Journal.open(tmp_path / "journal.jsonl").records == [record(0)]
 
 
 def test_a_torn_last_line_from_a_killed_run_is_dropped_and_the_file_repaired(tmp_path):
