@@ -2,23 +2,26 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from typing import Any
 
 import numpy as np
 
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.metrics import spl
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import Staged, materialize, trial_rng
 from lerobot_contrast.contrast.strategy import PlannedTrial, exceeds_budget
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialRecord
+from lerobot_contrast.runners.episode import TrialContext
 
-Execute = Callable[[Instance, np.random.Generator], Outcome]
+Execute = Callable[[TrialContext], Outcome]
+# Trials whose staging was paid for: the scene they left behind is where the next one starts.
+STAGED = ("done", "aborted")
 
 
 class BudgetError(UserError):
@@ -39,7 +42,7 @@ class LoopState:
         state = cls(scene=initial_scene, next_index=len(records))
         for record in records:
             state.previous = Staged(record.instance, record.staging)
-            if record.status == "done" and record.scene_after is not None:
+            if record.status in STAGED and record.scene_after is not None:
                 state.scene = record.scene_after
                 state.cumulative_cost = record.cumulative_cost
         return state
@@ -72,6 +75,7 @@ def run_trials(
     seed: int,
     state: LoopState,
     execute: Execute,
+    settings: Mapping[str, Any] | None = None,
 ) -> Iterator[TrialRecord]:
     """Execute the plan from `state.next_index`, yielding one record per trial, until done or over budget."""
     for trial in plan[state.next_index :]:
@@ -83,11 +87,26 @@ def run_trials(
         if staged.instance is None:
             yield _skipped(trial, task, state.cumulative_cost)
             continue
-        cost = cost_model(state.scene, staged.instance.scene)
+        context = TrialContext(
+            index=trial.index,
+            instance=staged.instance,
+            base=trial.base,
+            current=state.scene,
+            planned_cost=cost_model(state.scene, staged.instance.scene),
+            staging=staged.staging,
+            rng=np.random.default_rng([seed, trial.index, 1]),
+            planned_trials=len(plan),
+            axis=_axis(task, trial.perturbation),
+            settings=dict(settings or {}),
+        )
         started_at = datetime.now(UTC).isoformat(timespec="seconds")
-        outcome = execute(staged.instance, np.random.default_rng([seed, trial.index, 1]))
-        state.cumulative_cost += cost
-        state.scene = outcome.scene_after
+        outcome = execute(context)
+        cost = context.planned_cost if outcome.cost is None else outcome.cost
+        if outcome.status in STAGED:
+            state.cumulative_cost += cost
+            state.scene = outcome.scene_after
+        else:  # skipped: nothing was staged, so the next trial starts where this one would have
+            cost = 0.0
         yield _scored(trial, task, staged, outcome, cost, state.cumulative_cost, started_at)
 
 
@@ -125,7 +144,7 @@ def _scored(
         family=instance.family,
         staging=staged.staging,
         repeat=trial.repeat,
-        status="done",
+        status=outcome.status,
         instance=instance,
         cost=cost,
         cumulative_cost=cumulative,
@@ -138,10 +157,12 @@ def _scored(
         duration_s=outcome.duration_s,
         started_at=started_at,
         scene_after=outcome.scene_after,
+        rerun_path=outcome.rerun_path,
+        dataset_episode=outcome.dataset_episode,
         extra=dict(outcome.extra),
     )
 
 
-def assume_unchanged(instance: Instance, rng: np.random.Generator) -> Outcome:
+def assume_unchanged(context: TrialContext) -> Outcome:
     """A dry-run stand-in for execution: the robot leaves the scene exactly as it was staged."""
-    return Outcome(success=False, steps=0, path_length=0.0, scene_after=instance.scene, duration_s=0.0)
+    return Outcome(success=False, steps=0, path_length=0.0, scene_after=context.instance.scene, duration_s=0.0)

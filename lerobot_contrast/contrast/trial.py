@@ -9,12 +9,16 @@ from typing import Any, Literal
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Scene
 
-Status = Literal["done", "not_applicable", "aborted"]
+Status = Literal["done", "not_applicable", "aborted", "skipped"]
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """What a runner reports after executing an instance."""
+    """What a runner reports after executing an instance.
+
+    `status` is "aborted" after an emergency stop or a lost robot, "skipped" when the operator skipped
+    the trial. `cost`, when set, replaces the planned staging cost with what was measured (reset seconds)
+    or what the operator reported moving."""
 
     success: bool
     steps: int
@@ -23,6 +27,10 @@ class Outcome:
     duration_s: float
     progress: float | None = None
     reference_length: float | None = None
+    status: Status = "done"
+    cost: float | None = None
+    rerun_path: str | None = None
+    dataset_episode: int | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 
 

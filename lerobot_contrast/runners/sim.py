@@ -12,6 +12,7 @@ import numpy as np
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.trial import Outcome
 from lerobot_contrast.policies import Policy
+from lerobot_contrast.runners.episode import TrialContext
 
 ReferenceFn = Callable[[Instance], float | None]
 
@@ -26,7 +27,8 @@ class SimRunner:
         self.max_steps = max_steps
         self.reference = reference
 
-    def __call__(self, instance: Instance, rng: np.random.Generator) -> Outcome:
+    def __call__(self, context: TrialContext) -> Outcome:
+        instance, rng = context.instance, context.rng
         start = time.perf_counter()
         observation, info = self.env.reset(seed=int(rng.integers(2**31)), options={"instance": instance})
         self.policy.reset(instance, rng)

@@ -24,7 +24,8 @@ def bases(n, side="right"):
 def pusher(to: str | None = None):
     """Pushes `a` to the instructed side (or always to `to`), like a policy that solves or confuses the task."""
 
-    def execute(instance, rng):
+    def execute(context):
+        instance = context.instance
         side = to or instance.goal["side"]
         after = instance.scene.with_object("a", Pose(0.15 if side == "right" else -0.15, 0.0))
         return Outcome(
