@@ -38,6 +38,8 @@ class EvalConfig:
     # Perturbations the contrast strategy applies after each base instance, in order (default: all of the
     # task's), e.g. [LB1,LB2,SB1,SB2].
     perturbations: list[str] | None = None
+    # Order in which base instances are visited: iid (as sampled).
+    order: str = "iid"
     # Number of i.i.d. base instances sampled for the evaluation set.
     n_instances: int = 50
     # Times each planned trial is run (restaging the same scene between repeats).

@@ -38,7 +38,7 @@ def build_plan(cfg: EvalConfig) -> tuple[Any, list[PlannedTrial]]:
     perturbations = task.perturbations.select(cfg.perturbations) if cfg.strategy == "contrast" else []
     rng = np.random.default_rng(cfg.seed)
     instances = task.sample(cfg.n_instances, rng)
-    return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng)
+    return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order)
 
 
 def default_output_dir(cfg: EvalConfig) -> Path:

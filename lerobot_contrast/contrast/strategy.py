@@ -82,17 +82,24 @@ STRATEGIES = {
 }
 
 
+# How base instances are visited: "iid" keeps the sampled order.
+ORDERS = ("iid",)
+
+
 def make_plan(
     strategy: str,
     instances: list[Instance],
     perturbations: list[Perturbation],
     repeats: int,
     rng: np.random.Generator,
+    order: str = "iid",
 ) -> list[PlannedTrial]:
     try:
         planner = STRATEGIES[strategy]
     except KeyError:
         raise UserError(f"--strategy: unknown strategy {strategy!r}; choose from: {', '.join(STRATEGIES)}") from None
+    if order not in ORDERS:
+        raise UserError(f"--order: unknown order {order!r}; choose from: {', '.join(ORDERS)}")
     return planner(instances, perturbations, repeats, rng)
 
 

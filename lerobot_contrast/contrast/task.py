@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
-from lerobot_contrast.contrast.scene import Scene
+from lerobot_contrast.contrast.scene import Pose, Scene
 
 
 class Task(Protocol):
@@ -36,3 +37,45 @@ class Task(Protocol):
     def is_achieved(self, instance: Instance, scene: Scene) -> bool:
         """Whether `scene` satisfies the instance's goal, given that it started in `instance.scene`."""
         ...
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """How an episode went: success, and the fraction of subgoals reached where the task has several."""
+
+    success: bool
+    progress: float | None = None
+
+
+# How a task's outcomes are judged (its optional `outcome` attribute):
+#   "predicate": from the scene the robot left behind (needs a robot that reports its scene), else the operator;
+#   "label": the operator says success or failure;
+#   "subgoals": the operator says how many of `task.subgoals(instance)` were reached, in order.
+OUTCOME_MODES = ("predicate", "label", "subgoals")
+
+
+def outcome_mode(task: Task) -> str:
+    return getattr(task, "outcome", "predicate")
+
+
+def subgoals(task: Task, instance: Instance) -> list[str]:
+    """The instance's ordered subgoals (empty for a single-goal task)."""
+    hook = getattr(task, "subgoals", None)
+    return [] if hook is None else list(hook(instance))
+
+
+def judge(task: Task, instance: Instance, path: list[Pose], scene_after: Scene) -> Judgement:
+    """Judge an episode from the robot's planar path and final scene.
+
+    A task may define `judge(instance, path, scene_after) -> Judgement` (e.g. ordered subgoals along a
+    navigation path); otherwise success is `is_achieved` on the final scene."""
+    hook = getattr(task, "judge", None)
+    if hook is not None:
+        return hook(instance, path, scene_after)
+    return Judgement(success=task.is_achieved(instance, scene_after))
+
+
+def reference_length(task: Task, instance: Instance) -> float | None:
+    """The length of a reference (shortest or demonstrated) path for SPL, when the task can compute one."""
+    hook = getattr(task, "reference_length", None)
+    return None if hook is None else hook(instance)
