@@ -9,19 +9,41 @@ from pathlib import Path
 from typing import Any
 
 import draccus
+from lerobot.robots import RobotConfig
 
 from lerobot_contrast.contrast.errors import UserError
+
+# The scripted baselines; any other --policy.type is a LeRobot policy type (act, diffusion, smolvla, ...).
+SCRIPTED_POLICIES = ("oracle", "random")
 
 
 @dataclass
 class PolicyArgs:
-    # Which policy to evaluate: `oracle` (scripted push oracle with privileged state) or `random`.
-    type: str = "oracle"
+    # A LeRobot policy to load: a directory written by save_pretrained, or a Hub repo id.
+    path: str | None = None
+    # Without --policy.path: `oracle` (scripted push oracle with privileged state), `random`, or a LeRobot
+    # policy type built fresh with random weights from the robot's features (for smoke tests).
+    type: str | None = None
+    # Torch device for a LeRobot policy (cpu, cuda, mps); default: the policy config's own.
+    device: str | None = None
+    # Automatic mixed precision for a LeRobot policy on CUDA.
+    use_amp: bool = False
     # Gaussian noise added to each oracle action, in metres (0 = none).
     noise_std: float = 0.0
     # Probability per episode that the oracle ignores a perturbed instruction's words and executes
     # its base instruction instead (0 = reads every instruction).
     language_blind: float = 0.0
+
+    @property
+    def kind(self) -> str:
+        """oracle | random | lerobot"""
+        if self.path is None and self.type in (None, *SCRIPTED_POLICIES):
+            return self.type or "oracle"
+        return "lerobot"
+
+    @property
+    def label(self) -> str:
+        return self.path or self.type or "oracle"
 
 
 @dataclass
@@ -53,8 +75,20 @@ class EvalConfig:
     seed: int = 0
     # Episode length limit in control steps (10 Hz for Language-Table).
     max_episode_steps: int = 200
+    # Episode length limit in seconds (default: none besides --max_episode_steps).
+    max_episode_s: float | None = None
     # The policy under evaluation.
     policy: PolicyArgs = field(default_factory=PolicyArgs)
+    # The robot: any LeRobot robot type, plugins included (e.g. so101_follower, lekiwi_client, locobot), or
+    # language_table_sim (default for --task=language_table).
+    robot: RobotConfig | None = None
+    # Control rate in Hz; default: 10 on hardware, as fast as possible on a simulated robot.
+    fps: float | None = None
+    # Who stages scenes and judges outcomes: console (an operator, prompted between trials) or auto (the robot
+    # reports and stages its own scene, as in simulation). Default: auto where the robot can, else console.
+    operator: str | None = None
+    # Map robot observation keys to the policy's input features, e.g. {"observation.images.top": "observation.images.front"}.
+    rename_map: dict[str, str] = field(default_factory=dict)
     # Run directory (default: outputs/contrast/<date>/<time>_<task>_<strategy>).
     output_dir: Path | None = None
     # Continue the run in --output_dir where it stopped.
@@ -86,7 +120,7 @@ def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
         if not arg.startswith("-"):
             raise ConfigError(f"unexpected argument {arg!r}; flags look like --name=value (see --help)")
         name = arg.lstrip("-").split("=", 1)[0]
-        if name not in known:
+        if name not in known and not name.startswith("robot."):  # robot fields depend on --robot.type
             raise ConfigError(f"unknown flag --{name}; see --help for the flags this command takes")
     try:
         return draccus.parse(config_class=cls, args=argv)

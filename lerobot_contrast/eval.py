@@ -15,9 +15,11 @@ from lerobot_contrast.contrast.cost import make_cost_model
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
 from lerobot_contrast.evaluate import LoopState, assume_unchanged, check_budget, run_trials
+from lerobot_contrast.operator_console import Answers, OperatorConsole, SessionStopped
 from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import RunDir, open_run_dir
 from lerobot_contrast.record.summary import format_summary, summarize
+from lerobot_contrast.runners.robot import RobotLostError, RobotRunner
 from lerobot_contrast.tasks import make_task
 
 
@@ -46,28 +48,76 @@ def default_output_dir(cfg: EvalConfig) -> Path:
     return Path("outputs/contrast") / now.strftime("%Y-%m-%d") / f"{now:%H-%M-%S}_{cfg.task}_{cfg.strategy}"
 
 
-def make_runner(cfg: EvalConfig, task: Any, plan: list[PlannedTrial]):
-    import gymnasium as gym
+# The simulated robot each task runs on when no --robot is given.
+TASK_ROBOTS = {"language_table": "language_table_sim"}
+OPERATORS = ("auto", "console")
+DEFAULT_HARDWARE_FPS = 10.0
 
-    import lerobot_contrast.sims  # noqa: F401  (registers the simulators)
+
+def register_robots() -> None:
+    """Make every robot type known before parsing: LeRobot's plugins and this package's simulated robots."""
+    from lerobot.utils.import_utils import register_third_party_plugins
+
+    import lerobot_contrast.sims.language_table.config_language_table_sim  # noqa: F401
+
+    register_third_party_plugins()
+
+
+def make_robot(cfg: EvalConfig) -> Any:
+    from lerobot.robots import RobotConfig, make_robot_from_config
+
+    if cfg.robot is None:
+        if cfg.task not in TASK_ROBOTS:
+            raise ConfigError(f"--task={cfg.task} has no simulator; name your robot with --robot.type=...")
+        cfg.robot = RobotConfig.get_choice_class(TASK_ROBOTS[cfg.task])()
+    try:
+        return make_robot_from_config(cfg.robot)
+    except Exception as error:
+        raise ConfigError(
+            f"--robot.type={cfg.robot.type}: cannot build the robot ({' '.join(str(error).split())})"
+        ) from None
+
+
+def make_policy(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]) -> Any:
     from lerobot_contrast.policies import OraclePolicy, RandomPolicy
-    from lerobot_contrast.runners.sim import SimRunner
-    from lerobot_contrast.sims.language_table.oracle import reference_path
-    from lerobot_contrast.tasks import SIM_IDS
+    from lerobot_contrast.pretrained_policy import PretrainedPolicy
+    from lerobot_contrast.tasks.language_table.board import MAX_ACTION
 
-    env = gym.make(SIM_IDS[cfg.task], obs_type="state", max_episode_steps=cfg.max_episode_steps)
+    kind = cfg.policy.kind
+    if kind == "lerobot":
+        return PretrainedPolicy(
+            robot, cfg.policy.path, cfg.policy.type, cfg.policy.device, cfg.rename_map, cfg.policy.use_amp
+        )
+    if robot.name != "language_table_sim":
+        raise ConfigError(
+            f"--policy.type={kind} drives the simulated tabletop only; give --policy.path for {robot.name}"
+        )
+    if kind == "random":
+        return RandomPolicy(list(robot.action_features), MAX_ACTION)
     bases = {trial.base.id: trial.base for trial in plan}
-    if cfg.policy.type == "oracle":
-        policy = OraclePolicy(env, task, bases, cfg.policy.noise_std, cfg.policy.language_blind)
-    elif cfg.policy.type == "random":
-        policy = RandomPolicy()
-    else:
-        raise ConfigError(f"--policy.type: unknown policy {cfg.policy.type!r}; choose from: oracle, random")
+    return OraclePolicy(robot.read_scene, task, bases, cfg.policy.noise_std, cfg.policy.language_blind)
 
-    def reference(instance):
-        return reference_path(task, instance, max_steps=cfg.max_episode_steps).length_m
 
-    return SimRunner(env, policy, cfg.max_episode_steps, reference)
+def make_runner(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial], unit: str) -> RobotRunner:
+    from lerobot_contrast.runners.episode import reports_scene
+
+    policy = make_policy(cfg, robot, task, plan)
+    mode = cfg.operator or ("auto" if reports_scene(robot) else "console")
+    if mode not in OPERATORS:
+        raise ConfigError(f"--operator: unknown mode {mode!r}; choose from: {', '.join(OPERATORS)}")
+    operator = OperatorConsole(Answers(sys.stdin), unit=unit) if mode == "console" else None
+    # Simulated robots step as fast as they can unless asked for a rate; hardware runs at a fixed one.
+    fps = cfg.fps if cfg.fps is not None else (None if getattr(robot, "simulated", False) else DEFAULT_HARDWARE_FPS)
+    return RobotRunner(
+        robot,
+        policy,
+        task,
+        operator=operator,
+        fps=fps,
+        max_steps=cfg.max_episode_steps,
+        max_episode_s=cfg.max_episode_s,
+        cost_unit=unit,
+    )
 
 
 def dry_run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any) -> None:
@@ -83,7 +133,8 @@ def dry_run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: An
 
 
 def run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir) -> dict[str, Any]:
-    execute = make_runner(cfg, task, plan)
+    robot = make_robot(cfg)
+    execute = make_runner(cfg, robot, task, plan, cost_model.unit)
     records = run_dir.journal.records
     state = LoopState.resume(records, task.storage_scene())
     if records:
@@ -93,24 +144,38 @@ def run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, r
     settings = {
         "task": cfg.task,
         "strategy": cfg.strategy,
-        "policy": cfg.policy.type,
+        "policy": cfg.policy.label,
+        "robot": robot.name,
         "seed": cfg.seed,
         "cost_unit": cost_model.unit,
         "budget": cfg.budget,
         "planned_trials": len(plan),
     }
     complete = False
+    connect(robot)
     try:
-        for record in run_trials(plan, task, cost_model, cfg.budget, cfg.seed, state, execute):
+        for record in run_trials(plan, task, cost_model, cfg.budget, cfg.seed, state, execute, settings):
             run_dir.journal.append(record)
             print(trial_line(record, cost_model.unit), flush=True)
         complete = True
     finally:
+        if robot.is_connected:
+            robot.disconnect()
         summary = summarize(run_dir.journal.records, settings=settings, complete=complete)
         metadata = {k: str(v) for k, v in settings.items()}
         write_results(run_dir.results_path, run_dir.journal.records, metadata)
         run_dir.write_summary(summary)
     return summary
+
+
+def connect(robot: Any) -> None:
+    try:
+        robot.connect()
+    except Exception as error:
+        raise ConfigError(
+            f"--robot.type={robot.name}: cannot connect ({' '.join(str(error).split())}); "
+            "check that it is powered and reachable, and its --robot.* settings"
+        ) from None
 
 
 def evaluate(cfg: EvalConfig) -> int:
@@ -124,15 +189,20 @@ def evaluate(cfg: EvalConfig) -> int:
         return 0
     cfg.output_dir = cfg.output_dir or default_output_dir(cfg)
     run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
+    resume = f"--output_dir={run_dir.path} --resume=true"
     try:
         summary = run(cfg, task, plan, cost_model, run_dir)
     except KeyboardInterrupt:
         print(
-            f"\ninterrupted: every finished trial is in {run_dir.journal.path}; continue with "
-            f"--output_dir={run_dir.path} --resume=true",
-            file=sys.stderr,
+            f"\ninterrupted: every finished trial is in {run_dir.journal.path}; continue with {resume}", file=sys.stderr
         )
         return 130
+    except SessionStopped as stop:
+        print(f"stopped: {stop}; {len(run_dir.journal.records)} trials recorded; continue with {resume}")
+        return 0
+    except RobotLostError as error:
+        print(f"error: {error} ({resume})", file=sys.stderr)
+        return 2
     print(format_summary(summary, cost_model.unit))
     spent, ran = summary["overall"]["cumulative_cost"], len(run_dir.journal.records)
     if cfg.budget is not None and spent > cfg.budget:
@@ -145,6 +215,7 @@ def evaluate(cfg: EvalConfig) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     try:
+        register_robots()
         return evaluate(parse_config(EvalConfig, argv))
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)

@@ -40,6 +40,11 @@ class SceneIO(Protocol):
     def stage_scene(self, scene: Scene) -> None: ...
 
 
+def reports_scene(robot: Any) -> bool:
+    """Whether `robot` can read and stage its scene now (a remote host may report that it cannot)."""
+    return isinstance(robot, SceneIO) and getattr(robot, "supports_scene_io", True)
+
+
 @dataclass(frozen=True)
 class EpisodeFiles:
     """Where an observer put the episode, merged into the trial's record."""

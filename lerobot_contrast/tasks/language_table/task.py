@@ -91,6 +91,12 @@ class LanguageTableTask:
     def is_achieved(self, instance: Instance, scene: Scene) -> bool:
         return fam.is_achieved(instance, scene)
 
+    def reference_length(self, instance: Instance) -> float:
+        """The noise-free push oracle's effector path length in metres, the reference for SPL."""
+        from lerobot_contrast.sims.language_table.oracle import reference_path  # the simulator needs pymunk
+
+        return reference_path(self, instance).length_m
+
     def push_target(self, instance: Instance, scene: Scene) -> tuple[str, np.ndarray]:
         return fam.push_target(instance, scene)
 

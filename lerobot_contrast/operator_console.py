@@ -1,0 +1,200 @@
+"""The operator console: what to stage before each trial, keys during it, and the outcome label after it.
+
+Answers are lines read from a stream (the terminal, or a scripted file in tests and CI) on a background
+thread, so the control loop can poll for the in-trial keys without ever blocking on input.
+"""
+
+from __future__ import annotations
+
+import collections
+import threading
+import time
+from dataclasses import dataclass
+from typing import IO
+
+from rich.console import Console
+from rich.table import Table
+
+from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.contrast.staging import staging_moves
+from lerobot_contrast.contrast.task import Judgement
+from lerobot_contrast.runners.episode import TrialContext
+
+# In-trial keys (a letter, then Enter): end the episode as a success or a failure, or stop the robot now.
+TRIAL_KEYS = {"s": "success", "f": "failure", "e": "estop"}
+AXIS_MEANING = {
+    "L": "new wording, same behaviour",
+    "LB": "new wording, new behaviour",
+    "S": "scene change, same behaviour",
+    "SB": "scene change, new behaviour",
+}
+
+
+class SessionStopped(Exception):
+    """The operator stopped the session (or their input ended); the run is resumable."""
+
+
+class Answers:
+    """Lines from `stream`, read on a daemon thread into a queue that the control loop polls."""
+
+    def __init__(self, stream: IO[str]) -> None:
+        self._lines: collections.deque[str] = collections.deque()
+        self._closed = False
+        self._ready = threading.Condition()
+        threading.Thread(target=self._read, args=(stream,), daemon=True, name="operator-input").start()
+
+    def _read(self, stream: IO[str]) -> None:
+        for line in iter(stream.readline, ""):
+            with self._ready:
+                self._lines.append(line.strip())
+                self._ready.notify_all()
+        with self._ready:
+            self._closed = True
+            self._ready.notify_all()
+
+    def take_key(self) -> str | None:
+        """The next line if it is an in-trial key; other answers stay queued for the prompts after the trial."""
+        with self._ready:
+            if self._lines and self._lines[0].lower() in TRIAL_KEYS:
+                return TRIAL_KEYS[self._lines.popleft().lower()]
+        return None
+
+    def next(self) -> str:
+        """Block for the next answer; the end of the input stops the session."""
+        with self._ready:
+            while not self._lines:
+                if self._closed:
+                    raise SessionStopped("the operator's input ended")
+                self._ready.wait()
+            return self._lines.popleft()
+
+
+@dataclass(frozen=True)
+class Staging:
+    action: str  # "ready" | "skip" | "stop"
+    reset_s: float = 0.0
+    moved: float | None = None  # the operator's own figure for the distance moved, when it differs from the plan
+
+
+@dataclass(frozen=True)
+class Label:
+    action: str  # "done" | "redo" | "skip" | "stop"
+    success: bool = False
+    progress: float | None = None
+
+
+class OperatorConsole:
+    def __init__(self, answers: Answers, console: Console | None = None, unit: str = "m") -> None:
+        self.answers = answers
+        self.console = console or Console(highlight=False)
+        self.unit = unit
+
+    def stage(self, context: TrialContext) -> Staging:
+        """Show what to move for this trial and time the operator from the prompt to "ready"."""
+        self._show_trial(context)
+        start = time.monotonic()
+        while True:
+            self.console.print(
+                "[bold]Enter[/] when staged · [bold]c METRES[/] if you moved things differently · "
+                "[bold]k[/] skip trial · [bold]q[/] stop session"
+            )
+            answer = self.answers.next()
+            if answer in ("", "ready", "y"):
+                return Staging("ready", time.monotonic() - start)
+            if answer in ("k", "q"):
+                return Staging("skip" if answer == "k" else "stop", time.monotonic() - start)
+            moved = _number(answer, "c")
+            if moved is not None and moved >= 0:
+                return Staging("ready", time.monotonic() - start, moved)
+            self.console.print(f"[red]not understood: {answer!r}[/]")
+
+    def _show_trial(self, context: TrialContext) -> None:
+        instance = context.instance
+        axis = f" ({AXIS_MEANING[context.axis]})" if context.axis else ""
+        self.console.rule(
+            f"trial {context.index + 1}/{context.planned_trials} · {instance.base_id} · "
+            f"{perturbation_label(instance.perturbation)}{axis}"
+        )
+        self.console.print(f"instruction: [bold]{instance.instruction}[/]")
+        moves = staging_moves(context.current, instance.scene)
+        if moves:
+            table = Table("move", "from", "to", "distance (m)")
+            for move in moves:
+                table.add_row(move.name, _where(move.start), _where(move.end), f"{move.distance:.3f}")
+            self.console.print(table)
+        moved = {move.name for move in moves}
+        still = sorted(set(instance.scene.objects) - moved)
+        if still:
+            self.console.print(f"leave as they are: {', '.join(still)}")
+        if not moves:
+            self.console.print("nothing to move")
+        self.console.print(f"planned cost: {context.planned_cost:.2f} {self.unit}")
+
+    def running(self) -> None:
+        self.console.print("running · [bold]s[/] success · [bold]f[/] failure · [bold]e[/] EMERGENCY STOP (then Enter)")
+
+    def aborted(self, reason: str) -> Label:
+        self.console.print(f"[bold red]trial aborted: {reason}[/]")
+        self.console.print("[bold]Enter[/] to continue with the next trial · [bold]q[/] stop session")
+        while True:
+            answer = self.answers.next()
+            if answer in ("", "q"):
+                return Label("stop" if answer == "q" else "done")
+
+    def label(self, subgoals: list[str], suggestion: Judgement | None, early: str | None) -> Label:
+        """Ask how the trial went: success/failure, or how many subgoals were reached, in order."""
+        if early is not None and not subgoals:
+            return Label("done", success=early == "success", progress=float(early == "success"))
+        default = _suggested(suggestion, subgoals)
+        choices = f"0-{len(subgoals)} subgoals reached ({', '.join(subgoals)})" if subgoals else "y success · n failure"
+        while True:
+            self.console.print(
+                f"outcome? {choices} · [bold]p FRACTION[/] progress · [bold]r[/] redo · [bold]k[/] skip · "
+                f"[bold]q[/] stop{default[1]}"
+            )
+            answer = self.answers.next().lower()
+            if answer == "" and default[0] is not None:
+                return default[0]
+            if answer in ("r", "k", "q"):
+                return Label({"r": "redo", "k": "skip", "q": "stop"}[answer])
+            parsed = _parse_label(answer, len(subgoals))
+            if parsed is not None:
+                return parsed
+            self.console.print(f"[red]not understood: {answer!r}[/]")
+
+
+def _parse_label(answer: str, n_subgoals: int) -> Label | None:
+    if not n_subgoals and answer in ("y", "n"):
+        return Label("done", success=answer == "y", progress=float(answer == "y"))
+    if n_subgoals and answer.isdigit() and int(answer) <= n_subgoals:
+        reached = int(answer)
+        return Label("done", success=reached == n_subgoals, progress=reached / n_subgoals)
+    progress = _number(answer, "p")
+    if progress is not None and 0.0 <= progress <= 1.0:
+        return Label("done", success=progress >= 1.0, progress=progress)
+    return None
+
+
+def _suggested(suggestion: Judgement | None, subgoals: list[str]) -> tuple[Label | None, str]:
+    if suggestion is None:
+        return None, ""
+    progress = suggestion.progress if suggestion.progress is not None else float(suggestion.success)
+    label = Label("done", success=suggestion.success, progress=progress)
+    said = (
+        f"{round(progress * len(subgoals))} subgoals" if subgoals else ("success" if suggestion.success else "failure")
+    )
+    return label, f" · [bold]Enter[/] accepts what the scene shows: {said}"
+
+
+def _number(answer: str, prefix: str) -> float | None:
+    head, _, value = answer.partition(" ")
+    if head != prefix:
+        return None
+    try:
+        return float(value)
+    except ValueError:
+        return None
+
+
+def _where(pose) -> str:
+    return "(off the workspace)" if pose is None else f"({pose.x:+.3f}, {pose.y:+.3f})"
