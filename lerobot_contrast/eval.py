@@ -81,6 +81,7 @@ def make_robot(cfg: EvalConfig) -> Any:
 def make_policy(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]) -> Any:
     from lerobot_contrast.policies import OraclePolicy, RandomPolicy
     from lerobot_contrast.pretrained_policy import PretrainedPolicy
+    from lerobot_contrast.runners.episode import reports_scene
     from lerobot_contrast.tasks.language_table.board import MAX_ACTION
 
     kind = cfg.policy.kind
@@ -88,7 +89,7 @@ def make_policy(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]
         return PretrainedPolicy(
             robot, cfg.policy.path, cfg.policy.type, cfg.policy.device, cfg.rename_map, cfg.policy.use_amp
         )
-    if robot.name != "language_table_sim":
+    if not (reports_scene(robot) and set(robot.action_features) == {"delta_x", "delta_y"}):
         raise ConfigError(
             f"--policy.type={kind} drives the simulated tabletop only; give --policy.path for {robot.name}"
         )

@@ -54,6 +54,8 @@ def _fresh_config(policy_type: str, device: str | None, features: dict[str, dict
         config = make_policy_config(policy_type, **({} if device is None else {"device": device}))
     except ValueError as error:
         raise PolicyLoadError(f"--policy.type: {' '.join(str(error).split())[:300]}") from None
+    if hasattr(config, "pretrained_backbone_weights"):  # a fresh policy is all random: fetch no vision backbone
+        config.pretrained_backbone_weights = None
     policy_features = dataset_to_policy_features(features)
     config.output_features = {k: v for k, v in policy_features.items() if k == "action"}
     config.input_features = {k: v for k, v in policy_features.items() if k != "action"}

@@ -227,8 +227,9 @@ class RobotRunner:
         return self._recorded(context, outcome)
 
     def _aborted(self, context: TrialContext, staging: Staging, episode: Episode) -> Outcome:
+        # After a lost link the scene is unknown (a restarted simulator is empty): assume it is as staged.
         scene_after = context.instance.scene
-        if self.scene_io and self._halt is None:
+        if self.scene_io and episode.ended_by == "estop":
             scene_after = self.robot.read_scene()
         outcome = Outcome(
             success=False,
