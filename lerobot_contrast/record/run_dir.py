@@ -12,7 +12,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.record.journal import Journal
 
 # Settings that may differ between the original run and its resumption.
-RESUME_FREE_KEYS = ("resume", "dry_run", "output_dir")
+RESUME_FREE_KEYS = ("resume", "dry_run", "output_dir", "operator")
 
 
 class RunDirError(UserError):
@@ -47,7 +47,10 @@ def write_json_atomic(path: Path, data: Any) -> None:
 
 
 def _comparable(config: dict[str, Any]) -> dict[str, Any]:
-    return {k: v for k, v in config.items() if k not in RESUME_FREE_KEYS}
+    comparable = {k: v for k, v in config.items() if k not in RESUME_FREE_KEYS}
+    if isinstance(comparable.get("robot"), dict):  # the same robot may come back at a new address or port
+        comparable["robot"] = {"type": comparable["robot"].get("type")}
+    return comparable
 
 
 def open_run_dir(path: Path, config: dict[str, Any], resume: bool) -> RunDir:
@@ -57,7 +60,8 @@ def open_run_dir(path: Path, config: dict[str, Any], resume: bool) -> RunDir:
         if not config_path.exists():
             raise RunDirError(f"--resume: {path} holds no run to resume (no config.json); drop --resume to start one")
         stored = json.loads(config_path.read_text(encoding="utf-8"))
-        changed = sorted(k for k in _comparable(config) if _comparable(stored).get(k) != config[k])
+        now, then = _comparable(config), _comparable(stored)
+        changed = sorted(k for k in now if then.get(k) != now[k])
         if changed:
             raise RunDirError(
                 f"--resume: {path} was started with different settings ({', '.join(changed)}); "
