@@ -49,9 +49,24 @@ def _load_config(path: str, device: str | None) -> PreTrainedConfig:
     return config
 
 
-def _fresh_config(policy_type: str, device: str | None, features: dict[str, dict]) -> PreTrainedConfig:
+def save_fresh_policy(robot: Any, policy_type: str, directory: Path, **overrides: Any) -> Path:
+    """A random-weight LeRobot policy shaped for `robot`, saved as `--policy.path` loads it (smoke tests, benchmarks)."""
+    features = robot_dataset_features(robot)
+    config = _fresh_config(policy_type, overrides.pop("device", None), features, **overrides)
+    policy = get_policy_class(config.type)(config)
+    preprocessor, postprocessor = make_pre_post_processors(config, dataset_stats=None)
+    for part in (policy, preprocessor, postprocessor):
+        part.save_pretrained(directory)
+    return directory
+
+
+def _fresh_config(
+    policy_type: str, device: str | None, features: dict[str, dict], **overrides: Any
+) -> PreTrainedConfig:
+    if device is not None:
+        overrides["device"] = device
     try:
-        config = make_policy_config(policy_type, **({} if device is None else {"device": device}))
+        config = make_policy_config(policy_type, **overrides)
     except ValueError as error:
         raise PolicyLoadError(f"--policy.type: {' '.join(str(error).split())[:300]}") from None
     if hasattr(config, "pretrained_backbone_weights"):  # a fresh policy is all random: fetch no vision backbone

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 PACKAGE = "lerobot_robot_flaky"
-CONFIG = '''
+CONFIG = """
 from dataclasses import dataclass
 
 from lerobot.robots import RobotConfig
@@ -24,7 +24,7 @@ from lerobot_contrast.sims.language_table.config_language_table_sim import Langu
 class FlakyTabletopConfig(LanguageTableSimConfig):
     fail_at_action: int = -1
     can_reconnect: bool = True
-'''
+"""
 ROBOT = '''
 from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim
 
