@@ -2,7 +2,13 @@
 perturbations and cost, validated on load with errors that name the file, line and key."""
 
 from lerobot_contrast.tasks.task_file.cost import HandlingTimeCost
-from lerobot_contrast.tasks.task_file.loader import example_names, load_task, task_file_path, task_from_dict
+from lerobot_contrast.tasks.task_file.loader import (
+    example_names,
+    examples_dir,
+    load_task,
+    task_file_path,
+    task_from_dict,
+)
 from lerobot_contrast.tasks.task_file.nodes import TaskFileError
 from lerobot_contrast.tasks.task_file.perturbations import GENERIC
 from lerobot_contrast.tasks.task_file.schema import VERSION, TaskSpec
@@ -16,6 +22,7 @@ __all__ = [
     "TaskFileError",
     "TaskSpec",
     "example_names",
+    "examples_dir",
     "load_task",
     "task_file_path",
     "task_from_dict",

@@ -139,8 +139,10 @@ def _check_sampling(root: Node, spec: TaskSpec) -> None:
     """Objects fit in their areas, and every template yields a valid instance that is not already achieved."""
     rng = np.random.default_rng(0)
     if sample_scene(spec, rng) is None:
-        root.get("workspace").fail(
-            f"cannot place the {len(spec.placed)} movable objects {spec.workspace.min_spacing:g} m apart in their "
+        workspace = root.get("workspace")
+        spacing = spec.workspace.min_spacing / UNITS[spec.workspace.units]
+        (workspace.get("min_spacing") or workspace).fail(
+            f"cannot place the {len(spec.placed)} movable objects {spacing:g} {spec.workspace.units} apart in their "
             "areas; lower min_spacing, widen the areas, or mark some objects spare"
         )
     task = FileTask(spec)

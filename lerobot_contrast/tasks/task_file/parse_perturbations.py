@@ -13,7 +13,7 @@ from typing import Any
 from lerobot_contrast.contrast.perturbation import AXES
 from lerobot_contrast.tasks.task_file.nodes import Node
 from lerobot_contrast.tasks.task_file.parse_world import UNITS
-from lerobot_contrast.tasks.task_file.perturbations import GENERIC, swap_pairs
+from lerobot_contrast.tasks.task_file.perturbations import GENERIC, custom_kwargs, swap_pairs
 from lerobot_contrast.tasks.task_file.schema import PerturbationSpec, TaskSpec, Template
 from lerobot_contrast.tasks.task_file.wording import mentions
 
@@ -168,7 +168,8 @@ def _import(node: Node, module_name: str, base_dir: Path | None):
 
 
 def load_function(node: Node, params: dict[str, Any], base_dir: Path | None):
-    """The custom perturbation function named 'module:function', checked to accept (instance, rng, **params)."""
+    """The custom perturbation function named 'module:function', checked to accept (instance, rng, **params)
+    (and `task`, when it asks for the task)."""
     module_name, _, attr = node.text().partition(":")
     if not module_name or not attr:
         node.fail("expected 'module:function', e.g. my_perturbations:swap_colours")
@@ -176,7 +177,7 @@ def load_function(node: Node, params: dict[str, Any], base_dir: Path | None):
     if not callable(fn):
         node.fail(f"module {module_name!r} has no function {attr!r}")
     try:
-        inspect.signature(fn).bind(None, None, **params)
+        inspect.signature(fn).bind(None, None, **custom_kwargs(fn, params, None))
     except TypeError as error:
         node.fail(f"{attr}() must accept (instance, rng, **params) with these params: {error}")
     return fn

@@ -7,7 +7,8 @@ gets the instance set in the scene the robot left behind and returns the perturb
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import inspect
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -130,8 +131,11 @@ def _clear_of_task(task: FileTask, instance: Instance, clearance: float) -> Call
 
 
 def _distractors(task: FileTask, instance: Instance) -> list[str]:
+    """Movable objects in the scene that the instruction does not involve (objects the file does not declare,
+    reported by a robot's perception, are left alone)."""
     busy = set(involved(instance.goal, task.spec.objects))
-    return [n for n in instance.scene.objects if task.spec.objects[n].movable and n not in busy]
+    movable = {n for n, o in task.spec.objects.items() if o.movable}
+    return [n for n in instance.scene.objects if n in movable and n not in busy]
 
 
 def move_distractor(task: FileTask, min_move: float, clearance: float) -> PerturbFn:
@@ -203,6 +207,12 @@ GENERIC: dict[str, tuple[str, Callable[..., PerturbFn], str]] = {
     "add_remove_distractor": ("S", add_remove_distractor, "add or remove an object the instruction does not involve"),
     "move_goal_object": ("SB", move_goal_object, "move the object the goal is about"),
 }
+
+
+def custom_kwargs(fn: Callable, params: Mapping[str, Any], task: Any) -> dict[str, Any]:
+    """A custom perturbation's keyword arguments: its params, plus the task when it takes a `task` argument."""
+    wants_task = "task" in inspect.signature(fn).parameters
+    return {**params, "task": task} if wants_task else dict(params)
 
 
 def build(task: FileTask, kind: str, params: dict[str, Any]) -> PerturbFn:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
 from collections.abc import Mapping
 
 import numpy as np
@@ -17,12 +16,6 @@ from lerobot_contrast.tasks.task_file.schema import PerturbationSpec, TaskSpec, 
 from lerobot_contrast.tasks.task_file.wording import pick
 
 SAMPLE_TRIES = 1000  # scene and slot draws per instance before the sampler gives up
-
-
-def custom_kwargs(fn, params: Mapping, task) -> dict:
-    """A custom perturbation's keyword arguments: its params, plus the task when it asks for `task`."""
-    wants_task = "task" in inspect.signature(fn).parameters
-    return {**params, "task": task} if wants_task else dict(params)
 
 
 class FileTask:
@@ -54,7 +47,7 @@ class FileTask:
     def _perturb_fn(self, p: PerturbationSpec) -> PerturbFn:
         if p.function is None:
             return perturbations.build(self, p.kind, dict(p.params))
-        fn, kwargs = p.function, custom_kwargs(p.function, p.params, self)
+        fn, kwargs = p.function, perturbations.custom_kwargs(p.function, p.params, self)
         return lambda instance, rng: fn(instance, rng, **kwargs)
 
     # --- building instances ---
@@ -93,9 +86,10 @@ class FileTask:
         if self.spec.instances is not None:
             listed = [(k, item) for k, item in enumerate(self.spec.instances) if item.template.family in self.families]
             if n > len(listed):
+                which = " of these families" if len(listed) < len(self.spec.instances) else ""
                 raise UserError(
-                    f"--n_instances={n}: {self.spec.source} lists {len(listed)} instances"
-                    f"{' of these families' if len(listed) < len(self.spec.instances) else ''}; ask for at most {len(listed)}"
+                    f"--n_instances={n}: {self.spec.source} lists {len(listed)} instances{which}; "
+                    f"ask for at most {len(listed)}"
                 )
             return [self._listed(k, item) for k, item in listed[:n]]
         if self.spec.seed is not None:
