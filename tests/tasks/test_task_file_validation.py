@@ -262,3 +262,18 @@ def test_the_cli_prints_a_bad_task_file_as_one_error_line(tmp_path):
         result.stderr == f"error: {path}:8: workspace.regions.left: region 'left' reaches outside the workspace "
         "(x 0..1, y -0.5..0.5 m); move or shrink it\n"
     )
+
+
+def test_deleting_any_line_gives_a_valid_task_or_a_one_line_error(tmp_path):
+    text = CUPS + LISTED
+    lines = text.splitlines(keepends=True)
+    outcomes = set()
+    for i in range(len(lines)):
+        path = write(tmp_path, "".join(lines[:i] + lines[i + 1 :]))
+        try:
+            load_task(path)
+            outcomes.add("valid")
+        except TaskFileError as error:
+            assert "\n" not in str(error) and str(error).startswith(f"{path}:")
+            outcomes.add("error")
+    assert outcomes == {"valid", "error"}

@@ -6,6 +6,7 @@ import string
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from lerobot_contrast.contrast.task import OUTCOME_MODES
 from lerobot_contrast.tasks.task_file.goals import ground_predicate, holds
 from lerobot_contrast.tasks.task_file.nodes import Node
 from lerobot_contrast.tasks.task_file.parse_world import ATTRIBUTES, UNITS, check_name, pose
@@ -246,6 +247,6 @@ def parse_outcome(node: Node | None, scale: float) -> tuple[str, float | str | N
     node.check_keys(("mode", "reference"))
     mode = node.get("mode")
     return (
-        "predicate" if mode is None else mode.choice(("predicate", "label", "subgoals")),
+        "predicate" if mode is None else mode.choice(OUTCOME_MODES),
         parse_reference(node.get("reference"), None, scale),
     )

@@ -12,7 +12,6 @@ from lerobot_contrast.contrast.scene import Pose
 
 VERSION = 1
 ROBOT = "robot"  # the subject name for goals about the robot's own pose
-OUTCOMES = ("predicate", "label", "subgoals")
 
 
 @dataclass(frozen=True)
