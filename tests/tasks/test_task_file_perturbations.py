@@ -92,7 +92,12 @@ def test_flip_turns_the_region_word_and_the_goal_around(cups):
 
 
 def test_paraphrase_uses_the_synonyms_and_the_referents_other_words(tmp_path):
-    task = load_task(write(tmp_path, CUPS.replace("{colour: red, category: cup,", "{words: [red cup, red mug],")))
+    task = load_task(
+        write(
+            tmp_path,
+            CUPS.replace("{colour: red, category: cup,", "{colour: red, category: cup, words: [red cup, red mug],"),
+        )
+    )
     rng = np.random.default_rng(0)
     seen = {perturb(task, task.perturbations.get("L"), hand_built(task), rng).instruction for _ in range(40)}
     assert seen == {"push the red cup to the left", "move the red mug to the left", "push the red mug to the left"}

@@ -277,3 +277,12 @@ def test_deleting_any_line_gives_a_valid_task_or_a_one_line_error(tmp_path):
             assert "\n" not in str(error) and str(error).startswith(f"{path}:")
             outcomes.add("error")
     assert outcomes == {"valid", "error"}
+
+
+def test_instances_built_in_python_are_checked_against_the_template(tmp_path):
+    task = load_task(write(tmp_path, CUPS))
+    scene = task.storage_scene()
+    with pytest.raises(UserError, match=r"task 'cups' has no template 'carry'; it has: move"):
+        task.make_instance("x", "carry", {}, scene)
+    with pytest.raises(UserError, match=r"slot 'side' needs one of left, right, got 'up'"):
+        task.make_instance("x", "move", {"cup": "red_cup", "side": "up"}, scene)

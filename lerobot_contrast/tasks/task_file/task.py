@@ -56,7 +56,16 @@ class FileTask:
         self, id: str, template: str | Template, slots: Mapping[str, str], scene: Scene, words=None, text=None
     ) -> Instance:
         """An instance of `template` with `slots` filled, set in `scene` (plain wording unless given)."""
-        template = self.templates[template] if isinstance(template, str) else template
+        if isinstance(template, str):
+            if template not in self.templates:
+                raise UserError(f"task {self.name!r} has no template {template!r}; it has: {', '.join(self.templates)}")
+            template = self.templates[template]
+        for name, slot in template.slots.items():
+            if slots.get(name) not in slot.candidates:
+                raise UserError(
+                    f"template {template.key!r}: slot {name!r} needs one of {', '.join(slot.candidates)}, "
+                    f"got {slots.get(name)!r}"
+                )
         words = {s: self.spec.words(v)[0] for s, v in slots.items()} | dict(words or {})
         instruction, goal = goals.compose(template, text or template.texts[0], slots, words)
         return Instance(id, template.family, instruction, scene, goal)
