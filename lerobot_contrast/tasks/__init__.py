@@ -18,8 +18,13 @@ SIM_IDS = {
 
 
 def make_task(name: str, **kwargs: Any) -> Any:
-    try:
+    """A task by name (a built-in domain or a shipped example task file) or by the path of a task file."""
+    if name in TASKS:
         module, attr = TASKS[name]
-    except KeyError:
-        raise UserError(f"--task: unknown task {name!r}; choose from: {', '.join(TASKS)}") from None
-    return getattr(import_module(module), attr)(**kwargs)
+        return getattr(import_module(module), attr)(**kwargs)
+    from lerobot_contrast.tasks.task_file import example_names, load_task, task_file_path
+
+    if task_file_path(name) is None:
+        choices = ", ".join([*TASKS, *example_names()])
+        raise UserError(f"--task: unknown task {name!r}; choose from: {choices}, or give the path of a task .yaml file")
+    return load_task(name, **kwargs)
