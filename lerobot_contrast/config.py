@@ -50,7 +50,8 @@ class PolicyArgs:
 class EvalConfig:
     """Contrast-set evaluation of a language-guided policy."""
 
-    # Task domain to evaluate on.
+    # The task: a built-in domain (language_table), a shipped task file by name (so101_blocks, lekiwi_fetch),
+    # or the path of a task .yaml file.
     task: str = "language_table"
     # Task families to sample from (default: all of the task's families), e.g. [block2block,separate].
     families: list[str] | None = None

@@ -11,9 +11,9 @@ import numpy as np
 
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config
 from lerobot_contrast.console import plan_lines, trial_line
-from lerobot_contrast.contrast.cost import make_cost_model
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
+from lerobot_contrast.contrast.task import cost_model as task_cost_model
 from lerobot_contrast.evaluate import LoopState, assume_unchanged, check_budget, run_trials
 from lerobot_contrast.operator_console import Answers, OperatorConsole, SessionStopped
 from lerobot_contrast.record.results import write_results
@@ -43,9 +43,9 @@ def build_plan(cfg: EvalConfig) -> tuple[Any, list[PlannedTrial]]:
     return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order)
 
 
-def default_output_dir(cfg: EvalConfig) -> Path:
+def default_output_dir(cfg: EvalConfig, task: Any) -> Path:
     now = datetime.now()
-    return Path("outputs/contrast") / now.strftime("%Y-%m-%d") / f"{now:%H-%M-%S}_{cfg.task}_{cfg.strategy}"
+    return Path("outputs/contrast") / now.strftime("%Y-%m-%d") / f"{now:%H-%M-%S}_{task.name}_{cfg.strategy}"
 
 
 # The simulated robot each task runs on when no --robot is given.
@@ -82,6 +82,7 @@ def make_policy(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]
     from lerobot_contrast.policies import OraclePolicy, RandomPolicy
     from lerobot_contrast.pretrained_policy import PretrainedPolicy
     from lerobot_contrast.runners.episode import reports_scene
+    from lerobot_contrast.tasks.language_table import LanguageTableTask
     from lerobot_contrast.tasks.language_table.board import MAX_ACTION
 
     kind = cfg.policy.kind
@@ -89,12 +90,17 @@ def make_policy(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]
         return PretrainedPolicy(
             robot, cfg.policy.path, cfg.policy.type, cfg.policy.device, cfg.rename_map, cfg.policy.use_amp
         )
-    if not (reports_scene(robot) and set(robot.action_features) == {"delta_x", "delta_y"}):
+    if set(robot.action_features) != {"delta_x", "delta_y"}:
         raise ConfigError(
             f"--policy.type={kind} drives the simulated tabletop only; give --policy.path for {robot.name}"
         )
     if kind == "random":
         return RandomPolicy(list(robot.action_features), MAX_ACTION)
+    if not (isinstance(task, LanguageTableTask) and reports_scene(robot)):
+        raise ConfigError(
+            "--policy.type=oracle solves Language-Table instructions in simulation only; "
+            "use --policy.type=random or --policy.path"
+        )
     bases = {trial.base.id: trial.base for trial in plan}
     return OraclePolicy(robot.read_scene, task, bases, cfg.policy.noise_std, cfg.policy.language_blind)
 
@@ -103,7 +109,8 @@ def make_runner(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]
     from lerobot_contrast.runners.episode import reports_scene
 
     policy = make_policy(cfg, robot, task, plan)
-    mode = cfg.operator or ("auto" if reports_scene(robot) else "console")
+    scene_io = reports_scene(robot, task.storage_scene().objects)
+    mode = cfg.operator or ("auto" if scene_io else "console")
     if mode not in OPERATORS:
         raise ConfigError(f"--operator: unknown mode {mode!r}; choose from: {', '.join(OPERATORS)}")
     operator = OperatorConsole(Answers(sys.stdin), unit=unit) if mode == "console" else None
@@ -118,6 +125,7 @@ def make_runner(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]
         max_steps=cfg.max_episode_steps,
         max_episode_s=cfg.max_episode_s,
         cost_unit=unit,
+        scene_io=scene_io,
     )
 
 
@@ -143,7 +151,7 @@ def run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, r
             f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {cost_model.unit} spent)"
         )
     settings = {
-        "task": cfg.task,
+        "task": task.name,
         "strategy": cfg.strategy,
         "policy": cfg.policy.label,
         "robot": robot.name,
@@ -183,12 +191,12 @@ def evaluate(cfg: EvalConfig) -> int:
     """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code."""
     validate(cfg)
     task, plan = build_plan(cfg)
-    cost_model = make_cost_model(cfg.cost)
+    cost_model = task_cost_model(task, cfg.cost)
     check_budget(plan, task, cost_model, cfg.budget, cfg.seed, task.storage_scene())
     if cfg.dry_run:
         dry_run(cfg, task, plan, cost_model)
         return 0
-    cfg.output_dir = cfg.output_dir or default_output_dir(cfg)
+    cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
     run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
     resume = f"--output_dir={run_dir.path} --resume=true"
     try:

@@ -120,7 +120,8 @@ class OperatorConsole:
         if moves:
             table = Table("move", "from", "to", "distance (m)")
             for move in moves:
-                table.add_row(move.name, _where(move.start), _where(move.end), f"{move.distance:.3f}")
+                moved = f"{move.distance:.3f}" if move.start and move.end else "in or out"
+                table.add_row(move.name, _where(move.start), _where(move.end), moved)
             self.console.print(table)
         moved = {move.name for move in moves}
         still = sorted(set(instance.scene.objects) - moved)

@@ -7,6 +7,7 @@ from typing import Protocol
 
 import numpy as np
 
+from lerobot_contrast.contrast.cost import CostModel, make_cost_model
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
 from lerobot_contrast.contrast.scene import Pose, Scene
@@ -79,3 +80,9 @@ def reference_length(task: Task, instance: Instance) -> float | None:
     """The length of a reference (shortest or demonstrated) path for SPL, when the task can compute one."""
     hook = getattr(task, "reference_length", None)
     return None if hook is None else hook(instance)
+
+
+def cost_model(task: Task, name: str) -> CostModel:
+    """The `--cost` model: the task's own (a task file may declare handling times), else the default one."""
+    hook = getattr(task, "cost_model", None)
+    return make_cost_model(name) if hook is None else hook(name)

@@ -3,6 +3,7 @@ observers (Rerun, dataset) that watch every episode step by step."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
@@ -40,9 +41,15 @@ class SceneIO(Protocol):
     def stage_scene(self, scene: Scene) -> None: ...
 
 
-def reports_scene(robot: Any) -> bool:
-    """Whether `robot` can read and stage its scene now (a remote host may report that it cannot)."""
-    return isinstance(robot, SceneIO) and getattr(robot, "supports_scene_io", True)
+def reports_scene(robot: Any, objects: Iterable[str] = ()) -> bool:
+    """Whether `robot` can read and stage a scene of `objects` now.
+
+    A remote host may report that it cannot (`supports_scene_io`); a simulator places only the objects
+    it models (`stageable_objects`)."""
+    if not (isinstance(robot, SceneIO) and getattr(robot, "supports_scene_io", True)):
+        return False
+    stageable = getattr(robot, "stageable_objects", None)
+    return stageable is None or set(objects) <= set(stageable)
 
 
 @dataclass(frozen=True)

@@ -54,10 +54,12 @@ class RobotRunner:
         max_episode_s: float | None = None,
         observers: Sequence[EpisodeObserver] = (),
         cost_unit: str = "m",
+        scene_io: bool | None = None,
         reconnect_attempts: int = 3,
         reconnect_wait_s: float = 1.0,
     ) -> None:
-        if operator is None and not reports_scene(robot):
+        self.scene_io = reports_scene(robot) if scene_io is None else scene_io
+        if operator is None and not self.scene_io:
             raise UserError(
                 f"--operator=auto needs a robot that reports and stages its scene; {robot.name} cannot, "
                 "so use --operator=console"
@@ -69,7 +71,6 @@ class RobotRunner:
         self.cost_unit = cost_unit
         self.reconnect_attempts, self.reconnect_wait_s = reconnect_attempts, reconnect_wait_s
         self.pose_keys: tuple[str, str] | None = getattr(robot, "pose_keys", None)
-        self.scene_io = reports_scene(robot)
         # Why the session cannot go on (robot lost, operator stopped after an abort), raised at the next trial
         # so that the trial that ended this way is journalled first.
         self._halt: Exception | None = None

@@ -11,11 +11,6 @@ TASKS = {
     "language_table": ("lerobot_contrast.tasks.language_table", "LanguageTableTask"),
 }
 
-# The gymnasium id of the simulator each task runs in.
-SIM_IDS = {
-    "language_table": "lerobot_contrast/LanguageTable-v0",
-}
-
 
 def make_task(name: str, **kwargs: Any) -> Any:
     """A task by name (a built-in domain or a shipped example task file) or by the path of a task file."""

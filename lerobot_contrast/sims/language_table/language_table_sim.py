@@ -27,6 +27,7 @@ class LanguageTableSim(Robot):
     config_class = LanguageTableSimConfig
     name = "language_table_sim"
     simulated = True  # the evaluator may step it as fast as it computes
+    stageable_objects = board.ALL_BLOCKS
     # Observation keys holding the effector's planar position in the scene frame.
     pose_keys = ("effector.x", "effector.y")
 
