@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Iterable
 from pathlib import Path
@@ -12,7 +13,7 @@ import pyarrow.parquet as pq
 
 from lerobot_contrast.contrast.trial import TrialRecord
 
-RESULTS_VERSION = 1
+RESULTS_VERSION = 2
 
 SCHEMA = pa.schema(
     [
@@ -38,6 +39,7 @@ SCHEMA = pa.schema(
         ("started_at", pa.string()),
         ("rerun_path", pa.string()),
         ("dataset_episode", pa.int64()),
+        ("extra", pa.string()),  # JSON: how the episode ended, the operator's reset time, task-specific metrics
     ]
 )
 
@@ -46,6 +48,7 @@ def record_row(record: TrialRecord) -> dict[str, Any]:
     row = {name: getattr(record, name, None) for name in SCHEMA.names}
     row["instance_id"] = record.instance_id
     row["instruction"] = None if record.instance is None else record.instance.instruction
+    row["extra"] = json.dumps(dict(record.extra), sort_keys=True)
     return row
 
 
