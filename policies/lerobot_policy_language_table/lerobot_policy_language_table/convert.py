@@ -98,8 +98,8 @@ def load_state_dict(policy: LanguageTablePolicy, flat: dict[str, np.ndarray]) ->
 def action_statistics(checkpoint: dict[str, Any]) -> dict[str, torch.Tensor]:
     """The action mean and std the network's outputs are de-normalised with (std floored at float32 eps, as released)."""
     stats = _require(checkpoint, "norm_info/action_statistics")
-    mean = np.asarray(_require(stats, "mean"), dtype=np.float32)
-    std = np.asarray(_require(stats, "std"), dtype=np.float32)
+    mean = np.array(_require(stats, "mean"), dtype=np.float32)
+    std = np.array(_require(stats, "std"), dtype=np.float32)
     if mean.shape != (2,) or std.shape != (2,):
         raise CheckpointError(f"norm_info/action_statistics must hold 2-D mean and std, got {mean.shape}, {std.shape}")
     std = np.maximum(std, np.finfo(np.float32).eps)
