@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
 from lerobot_policy_language_table.convert import convert
 
 from .synthetic_checkpoint import SMALL_CLIP, random_variables, train_state, write_checkpoint
@@ -18,7 +17,9 @@ def small_variables() -> dict:
 
 @pytest.fixture(scope="session")
 def small_checkpoint(small_variables, tmp_path_factory) -> Path:
-    return write_checkpoint(tmp_path_factory.mktemp("flax") / "bc_resnet_sim_checkpoint_955000", train_state(small_variables))
+    return write_checkpoint(
+        tmp_path_factory.mktemp("flax") / "bc_resnet_sim_checkpoint_955000", train_state(small_variables)
+    )
 
 
 @pytest.fixture(scope="session")

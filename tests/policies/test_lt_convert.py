@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 import torch
 from flax import traverse_util
-
 from lerobot_policy_language_table.convert import main
 from lerobot_policy_language_table.layers import center_crop_resize
 from lerobot_policy_language_table.modeling_language_table import LanguageTablePolicy
 from lerobot_policy_language_table.tokenizer import ClipTokenizer
+from safetensors.numpy import load_file
 
 from .flax_reference import SequenceLAVMSE
 from .synthetic_checkpoint import FULL_CLIP, SMALL_CLIP, random_variables, train_state, write_checkpoint
@@ -56,12 +56,14 @@ def test_output_is_lerobots_pretrained_format_with_the_checkpoints_action_statis
     assert {"config.json", "model.safetensors", "README.md"} <= names
     assert {"policy_preprocessor.json", "policy_postprocessor.json"} <= names
     config = json.loads((converted / "config.json").read_text())
-    assert (config["type"], config["clip_width"], config["clip_layers"], config["device"]) == ("language_table", 64, 2, "cpu")
+    assert (config["type"], config["clip_width"], config["clip_layers"], config["device"]) == (
+        "language_table",
+        64,
+        2,
+        "cpu",
+    )
     assert "training step 955,000" in (converted / "README.md").read_text()
-    stats_file = next(converted.glob("policy_postprocessor_step_0_unnormalizer_processor.safetensors"))
-    from safetensors.numpy import load_file
-
-    stats = load_file(stats_file)
+    stats = load_file(converted / "policy_postprocessor_step_0_unnormalizer_processor.safetensors")
     np.testing.assert_allclose(stats["action.mean"], [0.0012, -0.0031])
     np.testing.assert_allclose(stats["action.std"], [0.012, 0.018])
     assert not converted.with_name(converted.name + ".partial").exists()

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 import torch
 from flax import traverse_util
-
 from lerobot_policy_language_table import layers
 from lerobot_policy_language_table.param_map import LEAF_NAMES, to_torch_layout
 

@@ -13,7 +13,6 @@ from lerobot.configs import PreTrainedConfig
 from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.policies import get_policy_class, make_policy_config, make_pre_post_processors
 from lerobot.policies.utils import prepare_observation_for_inference
-
 from lerobot_policy_language_table import ClipActionProcessorStep, LanguageTableConfig, LanguageTablePolicy
 from lerobot_policy_language_table.layers import center_crop_resize
 from lerobot_policy_language_table.tokenizer import ClipTokenizer

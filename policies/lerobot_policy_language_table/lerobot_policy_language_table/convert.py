@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import httpx
 import numpy as np
 import torch
 from huggingface_hub import HfApi
@@ -91,7 +92,9 @@ def load_state_dict(policy: LanguageTablePolicy, flat: dict[str, np.ndarray]) ->
         filled.add(key)
     missing = [k for k in state if k not in filled and not k.endswith("num_batches_tracked")]
     if missing:
-        raise CheckpointError(f"missing from the checkpoint: {', '.join(missing[:5])}{' ...' if len(missing) > 5 else ''}")
+        raise CheckpointError(
+            f"missing from the checkpoint: {', '.join(missing[:5])}{' ...' if len(missing) > 5 else ''}"
+        )
     policy.model.load_state_dict(state)
 
 
@@ -139,7 +142,9 @@ def push_to_hub(out_dir: Path, repo_id: str) -> str:
     """Upload the converted policy folder as a model repository; returns the repository URL."""
     api = HfApi()
     url = api.create_repo(repo_id, repo_type="model", exist_ok=True)
-    api.upload_folder(repo_id=repo_id, folder_path=out_dir, repo_type="model", commit_message="Convert Language-Table BC")
+    api.upload_folder(
+        repo_id=repo_id, folder_path=out_dir, repo_type="model", commit_message="Convert Language-Table BC"
+    )
     return str(url)
 
 
@@ -158,8 +163,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.push_to_hub:
         try:
             print(f"pushed to {push_to_hub(out_dir, args.push_to_hub)}")
-        except (HfHubHTTPError, OSError) as err:
-            print(f"error: pushing to {args.push_to_hub} failed ({err}); the converted policy is in {out_dir}", file=sys.stderr)
+        except (HfHubHTTPError, httpx.HTTPError, OSError) as err:  # refused, unauthorised, unreachable, ...
+            reason = str(err).splitlines()[0]
+            print(
+                f"error: pushing to {args.push_to_hub} failed ({reason}); the converted policy is in {out_dir}",
+                file=sys.stderr,
+            )
             return 2
     return 0
 
