@@ -59,7 +59,8 @@ class VisualEncoder(nn.Module):
 
     def forward(self, frames: torch.Tensor) -> list[torch.Tensor]:
         x = resize_bilinear(normalize_imagenet(frames), self.input_size, self.input_size)
-        x = self.resnet(x)
+        # Channels-last makes the CPU convolutions and max-pools about twice as fast; the values are the same.
+        x = self.resnet(x.contiguous(memory_format=torch.channels_last))
         levels = []
         for conv in self.pyramid_convs:
             x = F.max_pool2d(F.relu(conv(x)), 2, 2)
