@@ -23,7 +23,7 @@ class _Parser(argparse.ArgumentParser):
 def parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="python -m lerobot_contrast.report",
-        description="Summarise run directories of lerobot_contrast.eval: report.md with 95%% intervals, and the "
+        description="Summarise run directories of lerobot_contrast.eval: report.md with 95% intervals, and the "
         "paper's figures. Runs that differ only in --seed are pooled; a complete standard run of the same "
         "policy, evaluation set and seed serves as the full i.i.d. reference for the estimation error.",
     )

@@ -24,7 +24,7 @@ def primary_metric(runs: list[Run]) -> str:
 
 
 def perturbation_order(groups: list[Group]) -> list[str]:
-    """ "original" first, then perturbations in the order the runs planned them."""
+    """Perturbation names, "original" first, then in the order the runs planned them."""
     names = ["original"]
     for group in groups:
         for name in group.pooled.sort_values("index")["perturbation"].dropna():

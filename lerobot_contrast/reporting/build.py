@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -98,5 +99,7 @@ def build_report(runs: list[Run], output_dir: Path, metric: str | None = None) -
     versus = analysis.versus_full(groups, runs, metric)
     paths = draw(runs, groups, versus, metric, output_dir)
     path = output_dir / "report.md"
-    path.write_text(write_markdown(runs, groups, versus, metric, paths), encoding="utf-8")
+    tmp = path.with_name(path.name + ".tmp")  # written last and whole, so a report.md is never partial
+    tmp.write_text(write_markdown(runs, groups, versus, metric, paths), encoding="utf-8")
+    os.replace(tmp, path)
     return Report(path, metric, groups, versus, paths)
