@@ -61,7 +61,7 @@ class EvalConfig:
     # Perturbations the contrast strategy applies after each base instance, in order (default: all of the
     # task's), e.g. [LB1,LB2,SB1,SB2].
     perturbations: list[str] | None = None
-    # Order in which base instances are visited: iid (as sampled).
+    # Order in which base instances are visited: iid (as sampled) or cost_aware (same bases, cheaper to stage).
     order: str = "iid"
     # Number of i.i.d. base instances sampled for the evaluation set.
     n_instances: int = 50

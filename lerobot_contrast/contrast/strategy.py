@@ -15,6 +15,7 @@ import numpy as np
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import Perturbation
+from lerobot_contrast.contrast.schedule import reorder_plan
 
 # reset: stage the instance's own scene. in_place: perturb the scene the robot left behind.
 # in_place_or_reset: give the instruction in the current scene, resetting only where it is infeasible.
@@ -82,8 +83,9 @@ STRATEGIES = {
 }
 
 
-# How base instances are visited: "iid" keeps the sampled order.
-ORDERS = ("iid",)
+# How base instances are visited: "iid" keeps the sampled order; "cost_aware" reorders the bases, each with
+# its chain of trials, to cut staging cost (see schedule.py).
+ORDERS = ("iid", "cost_aware")
 
 
 def make_plan(
@@ -100,7 +102,8 @@ def make_plan(
         raise UserError(f"--strategy: unknown strategy {strategy!r}; choose from: {', '.join(STRATEGIES)}") from None
     if order not in ORDERS:
         raise UserError(f"--order: unknown order {order!r}; choose from: {', '.join(ORDERS)}")
-    return planner(instances, perturbations, repeats, rng)
+    plan = planner(instances, perturbations, repeats, rng)
+    return reorder_plan(plan) if order == "cost_aware" else plan
 
 
 def exceeds_budget(cumulative_cost: float, budget: float | None) -> bool:

@@ -1,0 +1,65 @@
+"""`python -m lerobot_contrast.report RUN_DIR [RUN_DIR ...]`: tables and figures for one or more runs."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.reporting import build_report, load_run
+from lerobot_contrast.stats import METRICS
+
+
+class ReportArgsError(UserError):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line naming the problem, like the eval command
+        raise ReportArgsError(f"{message} (see --help)")
+
+
+def parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog="python -m lerobot_contrast.report",
+        description="Summarise run directories of lerobot_contrast.eval: report.md with 95% intervals, and the "
+        "paper's figures. Runs that differ only in --seed are pooled; a complete standard run of the same "
+        "policy, evaluation set and seed serves as the full i.i.d. reference for the estimation error.",
+    )
+    p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run directories written by lerobot_contrast.eval")
+    p.add_argument(
+        "--output_dir",
+        type=Path,
+        default=None,
+        help="where to write the report (default: RUN_DIR/report of the first run)",
+    )
+    p.add_argument(
+        "--metric",
+        choices=METRICS,
+        default=None,
+        help="main metric of the figures (default: spl where recorded, else progress)",
+    )
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        args = parser().parse_args(argv)
+        runs = [load_run(spec) for spec in args.runs]
+        output_dir = args.output_dir or runs[0].path / "report"
+        try:
+            path = build_report(runs, output_dir, args.metric).path
+        except OSError as error:
+            raise ReportArgsError(
+                f"--output_dir: cannot write to {output_dir} ({error.strerror}); choose a writable directory"
+            ) from None
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    print(f"report: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,128 @@
+"""The report's PNG figures (matplotlib, no display needed): the paper's two panels and its appendix figure."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from lerobot_contrast import stats
+from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.reporting.analysis import VersusFull
+
+METRIC_NAMES = {"spl": "SPL", "success": "success rate", "progress": "subgoal progress"}
+COLORS = [f"C{k}" for k in range(10)]
+
+
+def color_of(labels: list[str]) -> dict[str, str]:
+    return {label: COLORS[k % len(COLORS)] for k, label in enumerate(labels)}
+
+
+def _save(fig: Figure, path: Path) -> Path:
+    for ax in fig.axes:  # below the axes, where it hides no data
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
+    fig.savefig(path, dpi=150, bbox_inches="tight")
+    return path
+
+
+def _name(name: str) -> str:
+    return {"original": "original", "all": "all trials"}.get(name) or perturbation_label(name)
+
+
+def perturbation_figure(
+    table: dict[str, dict[str, stats.Estimate]],
+    order: list[str],
+    metric: str,
+    full: float | None,
+    colors: dict[str, str],
+    path: Path,
+) -> Path:
+    """Mean metric per perturbation with 95% intervals, one bar per group (the paper's left panels)."""
+    names = [n for n in order if any(n in per for per in table.values())]
+    width = 0.8 / max(len(table), 1)
+    fig = Figure(figsize=(max(6.0, 1.1 * len(names) + 3.0), 4.2))
+    ax = fig.add_subplot()
+    for k, (label, per) in enumerate(table.items()):
+        xs = [i + (k - (len(table) - 1) / 2) * width for i, n in enumerate(names) if n in per]
+        est = [per[n] for n in names if n in per]
+        means = np.array([e.mean for e in est])
+        err = np.array([[e.mean - e.low for e in est], [e.high - e.mean for e in est]])
+        ax.bar(xs, means, width, yerr=np.nan_to_num(err), capsize=3, color=colors[label], label=label)
+    if full is not None:
+        ax.axhline(full, color="black", linestyle="--", linewidth=1, label=f"full i.i.d. evaluation ({full:.3f})")
+    ax.set_xticks(range(len(names)), [_name(n) for n in names])
+    ax.set_xlabel("trials (original = the i.i.d. base instances; all trials = the strategy's estimate)")
+    ax.set_ylabel(f"mean {METRIC_NAMES[metric]} (95% interval)")
+    ax.set_ylim(0.0, 1.05)
+    ax.set_title(f"{METRIC_NAMES[metric]} per perturbation")
+    return _save(fig, path)
+
+
+def error_figure(
+    versus: list[VersusFull], metric: str, unit: str, colors: dict[str, str], path: Path, cap: float | None = None
+) -> Path:
+    """|estimate - full i.i.d. value| against cumulative cost, mean and std over seeds (the right panels)."""
+    fig = Figure(figsize=(7.5, 4.5))
+    ax = fig.add_subplot()
+    for v in versus:
+        c = v.curve
+        upto = _until(c.costs, v.end_cost)
+        seeds = f"{v.seeds} seed" + ("s" if v.seeds > 1 else "")
+        ax.plot(c.costs[upto], c.mean[upto], color=colors[v.label], label=f"{v.label} ({seeds})")
+        low, high = (c.mean - c.std)[upto], (c.mean + c.std)[upto]
+        ax.fill_between(c.costs[upto], low, high, color=colors[v.label], alpha=0.15, linewidth=0)
+    reference = float(np.mean([v.reference_costs.mean() for v in versus]))
+    ax.axvline(
+        reference,
+        color="black",
+        linestyle=":",
+        linewidth=1,
+        label=f"standard evaluation's cost ({reference:.0f} {unit})",
+    )
+    ax.set_xlim(0.0, cap if cap is not None else max(v.curve.costs[-1] for v in versus))
+    ax.set_ylim(bottom=0.0)
+    ax.set_xlabel(f"cumulative cost ({unit} of staging)")
+    ax.set_ylabel(f"|estimated − full i.i.d. {METRIC_NAMES[metric]}|")
+    ax.set_title(f"Estimation error of {METRIC_NAMES[metric]} vs cost (mean ± std over seeds)")
+    return _save(fig, path)
+
+
+def _until(costs: np.ndarray, end: float) -> np.ndarray:
+    """Bins up to and including the first one past `end`: a curve stops where its longest run stopped."""
+    return np.arange(len(costs)) <= np.searchsorted(costs, end)
+
+
+def trials_figure(
+    costs: np.ndarray,
+    curves: dict[str, tuple[np.ndarray, float]],
+    unit: str,
+    colors: dict[str, str],
+    path: Path,
+    reference: float | None = None,
+) -> Path:
+    """Done trials against cumulative cost per group: mean over seeds, shaded between the extreme seeds.
+
+    `curves` maps a group to its (seeds, bins) counts and the cost where its longest run ended."""
+    fig = Figure(figsize=(7.5, 4.5))
+    ax = fig.add_subplot()
+    for label, (counts, end) in curves.items():
+        upto = _until(costs, end)
+        ax.plot(costs[upto], counts.mean(axis=0)[upto], color=colors[label], label=label)
+        if len(counts) > 1:
+            low, high = counts.min(axis=0)[upto], counts.max(axis=0)[upto]
+            ax.fill_between(costs[upto], low, high, color=colors[label], alpha=0.15, linewidth=0)
+    if reference is not None:
+        ax.axvline(
+            reference,
+            color="black",
+            linestyle=":",
+            linewidth=1,
+            label=f"standard evaluation's cost ({reference:.0f} {unit})",
+        )
+    ax.set_xlim(0.0, costs[-1])
+    ax.set_ylim(bottom=0.0)
+    ax.set_xlabel(f"cumulative cost ({unit} of staging)")
+    ax.set_ylabel("trials run")
+    ax.set_title("Trials run vs cost (mean over seeds, band: fewest to most)")
+    return _save(fig, path)

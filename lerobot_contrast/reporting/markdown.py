@@ -1,0 +1,138 @@
+"""report.md: the tables of a report as Markdown."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from lerobot_contrast import stats
+from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.reporting.analysis import Comparison, SummaryRow, VersusFull
+from lerobot_contrast.reporting.figures import METRIC_NAMES
+from lerobot_contrast.reporting.runs import LAUNCH_KEYS, Run
+
+METHODS = {
+    "wilson": "Wilson score interval (binary outcomes, independent trials)",
+    "cluster_bootstrap": "cluster bootstrap over base instances (2,000 resamples, small-sample widened percentile)",
+    "wilson_clusters": "Wilson interval counting each base instance once (every outcome equal)",
+}
+
+
+def table(header: list[str], rows: list[list[str]]) -> list[str]:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    return lines + ["| " + " | ".join(row) + " |" for row in rows]
+
+
+def fmt(e: stats.Estimate | None, with_n: bool = False) -> str:
+    if e is None or e.n_trials == 0:
+        return "-"
+    interval = "" if math.isnan(e.low) else f" [{e.low:.3f}, {e.high:.3f}]"
+    return f"{e.mean:.3f}{interval}" + (f" (n={e.n_trials})" if with_n else "")
+
+
+def summary_section(rows: list[SummaryRow], unit: str) -> list[str]:
+    header = ["run", "seed", "trials", "n/a", "aborted", "skipped", f"cost ({unit})", f"trials per {unit}"]
+    header += [METRIC_NAMES[m] for m in stats.METRICS]
+    body = [
+        [r.label, r.seeds, *(str(r.counts[s]) for s in stats.STATUSES), f"{r.cost:.1f}", f"{r.trials_per_cost:.2f}"]
+        + [fmt(r.estimates[m]) for m in stats.METRICS]
+        for r in rows
+    ]
+    used = sorted({e.method for r in rows for e in r.estimates.values() if e.method in METHODS})
+    notes = [
+        "",
+        "Only trials with status done count toward the metrics. 95% intervals: "
+        + "; ".join(METHODS[m] for m in used)
+        + ".",
+    ]
+    return ["## Summary", "", *table(header, body), *notes, ""]
+
+
+def perturbation_name(name: str) -> str:
+    return perturbation_label(None if name == "original" else name)
+
+
+def by_group_section(
+    title: str, intro: str, data: dict[str, dict[str, stats.Estimate]], order: list[str], label=perturbation_name
+) -> list[str]:
+    """One row per perturbation (or family) in `order`, one column per group."""
+    names = [n for n in order if any(n in per for per in data.values())]
+    header = ["", *data]
+    body = [[label(n), *(fmt(per.get(n), True) for per in data.values())] for n in names]
+    return [f"## {title}", "", intro, "", *table(header, body), ""]
+
+
+def versus_section(versus: list[VersusFull], metric: str, unit: str, why_missing: str | None) -> list[str]:
+    lines = ["## Against the full i.i.d. evaluation", ""]
+    if not versus:
+        return lines + [f"No estimation-error panel: {why_missing}", ""]
+    name = METRIC_NAMES[metric]
+    lines.append(
+        f"The full i.i.d. value is the mean {name} of the complete, unbudgeted standard evaluation of the same "
+        "policy, evaluation set and seed. An estimate within a budget uses the trials whose cumulative cost is "
+        "within it. Means over seeds."
+    )
+    header = ["strategy", "seeds", f"standard's cost ({unit})", "trials at that cost", "x standard's trials"]
+    header += [
+        f"{name} error at that cost (signed)",
+        f"abs. {name} error at that cost",
+        f"abs. {name} error at the run's end",
+    ]
+    body = [
+        [v.label, str(v.seeds), f"{v.reference_costs.mean():.1f}", f"{v.trials_at_reference.mean():.0f}"]
+        + [f"{(v.trials_at_reference / v.reference_trials).mean():.2f}", f"{v.signed_at_reference.mean():+.3f}"]
+        + [f"{v.error_at_reference:.3f}", f"{v.error_at_end:.3f}"]
+        for v in versus
+    ]
+    return lines + ["", *table(header, body), ""]
+
+
+def comparison_section(items: list[Comparison]) -> list[str]:
+    if not items:
+        return []
+    lines = [
+        "## Policies on the same plan",
+        "",
+        "Mean per-trial difference (first minus second) over trials with the same instance id done by both, with a cluster bootstrap interval over base instances.",
+        "",
+    ]
+    header = ["first", "second", "paired trials", *(f"Δ {METRIC_NAMES[m]}" for m in stats.METRICS)]
+    body = []
+    for c in items:
+        n = max(e.n_trials for e in c.differences.values())
+        body.append([f"{c.a.name}", f"{c.b.name}", str(n), *(fmt(c.differences[m]) for m in stats.METRICS)])
+    return lines + [*table(header, body), ""]
+
+
+def flatten(config: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in config.items():
+        if isinstance(value, dict) and value:
+            out.update(flatten(value, f"{prefix}{key}."))
+        elif prefix or key not in LAUNCH_KEYS:
+            out[prefix + key] = value
+    return out
+
+
+def settings_section(runs: list[Run]) -> list[str]:
+    lines = ["## Settings of every run", ""]
+    for run in runs:
+        flags = ", ".join(f"`{k}={v}`" for k, v in flatten(run.config).items())
+        state = "complete" if run.complete else "incomplete (stopped early, or still running)"
+        lines.append(f"- **{run.name}** (`{run.path}`, {state}): {flags}")
+    return lines + [""]
+
+
+def notes_section(runs: list[Run]) -> list[str]:
+    notes = []
+    for run in runs:
+        if not run.complete:
+            notes.append(f"{run.name} is incomplete: its numbers cover the trials recorded so far.")
+        bases = run.results["base_id"].nunique()
+        planned = run.config.get("n_instances")
+        if run.config.get("order") == "cost_aware" and planned and bases < planned:
+            notes.append(
+                f"{run.name} visited {bases} of {planned} bases in cost-aware order: a prefix of a tour is not an "
+                "i.i.d. sample, so its estimate may be biased; choose --n_instances so the whole tour fits the budget."
+            )
+    return ["## Notes", "", *(f"- {n}" for n in notes), ""] if notes else []

@@ -1,0 +1,179 @@
+"""Run directories as report inputs: loading, labels, grouping over seeds, and matching runs for comparisons."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.record.journal import Journal
+from lerobot_contrast.record.results import read_results
+from lerobot_contrast.stats import frame
+
+# Settings that say where and how a run was launched, not what it evaluated.
+LAUNCH_KEYS = ("output_dir", "resume", "dry_run")
+# Settings a strategy may differ in from the standard run that serves as its full i.i.d. reference.
+STRATEGY_KEYS = ("strategy", "perturbations", "order", "budget")
+
+
+class ReportInputError(UserError):
+    pass
+
+
+@dataclass
+class Run:
+    """One run directory: its settings, summary (when written) and results table."""
+
+    path: Path
+    config: dict[str, Any]
+    summary: dict[str, Any]
+    results: pd.DataFrame
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+    @property
+    def seed(self) -> Any:
+        return self.config.get("seed")
+
+    @property
+    def complete(self) -> bool:
+        return bool(self.summary.get("complete", False))
+
+    @property
+    def cost_unit(self) -> str:
+        return self.summary.get("settings", {}).get("cost_unit") or {"reset_time": "s"}.get(
+            self.config.get("cost"), "m"
+        )
+
+    @property
+    def is_full_iid(self) -> bool:
+        """A complete, unbudgeted standard evaluation: the reference the other strategies are judged against."""
+        return self.config.get("strategy") == "standard" and self.config.get("budget") is None and self.complete
+
+
+def load_run(spec: str) -> Run:
+    """Load a report input. `spec` is a local run directory (holding config.json and journal.jsonl or
+    results.parquet)."""
+    path = Path(spec)
+    if not path.is_dir():
+        raise ReportInputError(f"{spec}: no such run directory; pass directories written by lerobot_contrast.eval")
+    config_path = path / "config.json"
+    if not config_path.exists():
+        raise ReportInputError(
+            f"{spec}: not a run directory (no config.json); pass the folder lerobot_contrast.eval wrote"
+        )
+    config = _read_json(config_path)
+    summary = _read_json(path / "summary.json") if (path / "summary.json").exists() else {}
+    return Run(path=path, config=config, summary=summary, results=_read_trials(path))
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as error:
+        raise ReportInputError(f"{path}: not valid JSON ({error.msg}, line {error.lineno})") from None
+
+
+def _read_trials(path: Path) -> pd.DataFrame:
+    """The journal is the record of truth (results.parquet is only rewritten when a run stops); it is read
+    from a copy, so a report never repairs or locks the journal of a run still writing it."""
+    journal = path / "journal.jsonl"
+    if journal.exists():
+        with tempfile.TemporaryDirectory() as tmp:
+            copy = Path(tmp) / journal.name
+            shutil.copyfile(journal, copy)
+            return frame(Journal.open(copy).records)
+    if (path / "results.parquet").exists():
+        try:
+            return frame(read_results(path / "results.parquet"))
+        except ValueError as error:
+            raise ReportInputError(str(error)) from None
+    raise ReportInputError(f"{path}: holds no trials (no journal.jsonl or results.parquet)")
+
+
+def design(config: dict[str, Any], drop: tuple[str, ...] = ()) -> str:
+    """The settings that define what a run evaluated, as a comparable key, leaving out `drop`."""
+    kept = {k: v for k, v in config.items() if k not in LAUNCH_KEYS + drop}
+    return json.dumps(kept, sort_keys=True, default=str)
+
+
+def strategy_label(run: Run) -> str:
+    """e.g. "standard", "contrast ΔLB1+ΔLB2", "contrast ΔLB1+ΔLB2+ΔSB1+ΔSB2, cost-aware order"."""
+    config = run.config
+    label = str(config.get("strategy"))
+    if label == "contrast":
+        names = config.get("perturbations") or list(pd.unique(run.results["perturbation"].dropna()))
+        label += " " + "+".join(perturbation_label(n) for n in names)
+    if config.get("order", "iid") != "iid":
+        label += f", {str(config['order']).replace('_', '-')} order"
+    if config.get("budget") is not None:
+        label += f", budget {config['budget']:g}"
+    return label
+
+
+def policy_label(config: dict[str, Any]) -> str:
+    policy = config.get("policy") or {}
+    label = str(policy.get("path") or policy.get("type") or "oracle")
+    extras = [f"{key.replace('_', ' ')} {policy[key]:g}" for key in ("noise_std", "language_blind") if policy.get(key)]
+    return label + (f" ({', '.join(extras)})" if extras and not policy.get("path") else "")
+
+
+@dataclass
+class Group:
+    """Runs of one design over seeds."""
+
+    label: str
+    runs: list[Run]
+
+    @property
+    def pooled(self) -> pd.DataFrame:
+        """All runs' trials, with base and instance ids made unique per seed so clusters stay per base."""
+        frames = []
+        for k, run in enumerate(self.runs):
+            df = run.results.copy()
+            df["base_id"] = f"{k}:" + df["base_id"].astype(str)
+            df["instance_id"] = f"{k}:" + df["instance_id"].astype(str)
+            frames.append(df)
+        return pd.concat(frames, ignore_index=True)
+
+
+def group_runs(runs: list[Run]) -> list[Group]:
+    """Runs that differ only in seed form one group, in input order; labels name the policy when they differ."""
+    groups: dict[str, list[Run]] = {}
+    for run in runs:
+        groups.setdefault(design(run.config, drop=("seed",)), []).append(run)
+    policies = {policy_label(run.config) for run in runs}
+    out = []
+    for members in groups.values():
+        label = strategy_label(members[0])
+        if len(policies) > 1:
+            label = f"{policy_label(members[0].config)}: {label}"
+        out.append(Group(label, sorted(members, key=lambda r: str(r.seed))))
+    return out
+
+
+def reference_for(run: Run, runs: list[Run]) -> Run | None:
+    """The full i.i.d. evaluation of the same policy, evaluation set and seed, if among `runs`."""
+    key = design(run.config, drop=STRATEGY_KEYS)
+    return next((r for r in runs if r.is_full_iid and design(r.config, drop=STRATEGY_KEYS) == key), None)
+
+
+def policy_pairs(runs: list[Run]) -> list[tuple[Run, Run]]:
+    """Pairs of runs with the same plan (every setting but the policy equal), for paired comparisons."""
+    pairs = []
+    for i, a in enumerate(runs):
+        for b in runs[i + 1 :]:
+            if design(a.config, drop=("policy",)) == design(b.config, drop=("policy",)) and a.config.get(
+                "policy"
+            ) != b.config.get("policy"):
+                pairs.append((a, b))
+    return pairs

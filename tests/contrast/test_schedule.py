@@ -1,0 +1,82 @@
+import itertools
+
+import numpy as np
+import pytest
+
+from lerobot_contrast.contrast.cost import DistanceCost
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.schedule import nearest_neighbour, path_cost, two_opt
+from lerobot_contrast.contrast.strategy import make_plan
+from lerobot_contrast.evaluate import LoopState, assume_unchanged, run_trials
+from lerobot_contrast.tasks.language_table import LanguageTableTask
+
+PERTURBATIONS = ["LB1", "LB2", "SB1", "SB2"]
+
+
+@pytest.fixture(scope="module")
+def language_table():
+    task = LanguageTableTask()
+    return task, task.sample(40, np.random.default_rng(11))
+
+
+def plan(task, instances, strategy, order, seed=3):
+    perturbations = task.perturbations.select(PERTURBATIONS) if strategy == "contrast" else []
+    return make_plan(strategy, instances, perturbations, 1, np.random.default_rng(seed), order)
+
+
+def planned_cost(task, trials, seed=3):
+    state = LoopState(task.storage_scene())
+    records = list(run_trials(trials, task, DistanceCost(), None, seed, state, assume_unchanged))
+    return records[-1].cumulative_cost
+
+
+def trial_keys(trials):
+    return sorted((t.base.id, t.perturbation or "", t.staging, t.repeat) for t in trials)
+
+
+@pytest.mark.parametrize("strategy", ["contrast", "standard"])
+def test_cost_aware_order_stages_the_same_trials_for_much_less(language_table, strategy):
+    task, instances = language_table
+    iid, cheap = plan(task, instances, strategy, "iid"), plan(task, instances, strategy, "cost_aware")
+    assert trial_keys(cheap) == trial_keys(iid)
+    assert [t.index for t in cheap] == list(range(len(iid)))
+    assert planned_cost(task, cheap) < 0.8 * planned_cost(task, iid)
+
+
+def test_each_base_keeps_its_chain_of_perturbations_behind_it(language_table):
+    task, instances = language_table
+    trials = plan(task, instances, "contrast", "cost_aware")
+    chains = [list(group) for _, group in itertools.groupby(trials, key=lambda t: t.base.id)]
+    assert len(chains) == len(instances)
+    assert all([t.perturbation for t in chain] == [None, *PERTURBATIONS] for chain in chains)
+
+
+def test_cost_aware_order_is_deterministic_for_a_seed(language_table):
+    task, instances = language_table
+    assert plan(task, instances, "contrast", "cost_aware") == plan(task, instances, "contrast", "cost_aware")
+
+
+def test_unknown_order_names_the_flag_and_the_choices(language_table):
+    task, instances = language_table
+    with pytest.raises(UserError, match="--order: unknown order 'greedy'; choose from: iid, cost_aware"):
+        plan(task, instances[:2], "contrast", "greedy")
+
+
+def test_nearest_neighbour_and_2opt_find_the_straight_path_through_points_on_a_line():
+    xs = np.random.default_rng(0).permutation(np.linspace(0.0, 1.0, 30))
+    m = np.abs(xs[:, None] - xs[None, :])
+    tour = two_opt(m, nearest_neighbour(m, start=0))
+    assert sorted(tour) == list(range(30))
+    assert path_cost(m, tour) == pytest.approx(1.0)
+
+
+def test_2opt_leaves_no_improving_reversal_under_asymmetric_costs():
+    rng = np.random.default_rng(5)
+    m = rng.uniform(0.0, 1.0, size=(9, 9))
+    start = rng.permutation(9)
+    tour = two_opt(m, start)
+    assert path_cost(m, tour) <= path_cost(m, start)
+    for i, j in itertools.combinations(range(9), 2):
+        flipped = tour.copy()
+        flipped[i : j + 1] = flipped[i : j + 1][::-1]
+        assert path_cost(m, flipped) >= path_cost(m, tour) - 1e-9

@@ -1,0 +1,108 @@
+"""`python -m lerobot_contrast.report` on small simulator runs: report.md, figures, comparisons and bad input."""
+
+import shutil
+import subprocess
+import sys
+
+import pytest
+from matplotlib.image import imread
+
+from lerobot_contrast.eval import main as eval_main
+from lerobot_contrast.report import main
+from lerobot_contrast.reporting import load_run
+
+PLAN = ["--n_instances=4", "--max_episode_steps=80", "--policy.noise_std=0.01"]
+RUNS = {
+    "standard-0": ["--strategy=standard", "--seed=0"],
+    "standard-1": ["--strategy=standard", "--seed=1"],
+    "contrast-0": ["--strategy=contrast", "--perturbations=[LB1,LB2,SB1,SB2]", "--seed=0"],
+    "contrast-1": ["--strategy=contrast", "--perturbations=[LB1,LB2,SB1,SB2]", "--seed=1"],
+    "blind-0": [
+        "--strategy=contrast",
+        "--perturbations=[LB1,LB2,SB1,SB2]",
+        "--seed=0",
+        "--policy.language_blind=1.0",
+    ],
+}
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("runs")
+    for name, flags in RUNS.items():
+        assert eval_main([*PLAN, *flags, f"--output_dir={root / name}"]) == 0
+    return root
+
+
+def test_a_report_over_several_runs_writes_tables_settings_and_readable_figures(runs, tmp_path, capsys):
+    out = tmp_path / "report"
+    assert main([str(runs / name) for name in RUNS] + [f"--output_dir={out}"]) == 0
+    assert capsys.readouterr().out.strip() == f"report: {out / 'report.md'}"
+    text = (out / "report.md").read_text()
+    # Seeds of one design are pooled; the two policies get their own rows and a paired comparison.
+    assert "| oracle (noise std 0.01): contrast ΔLB1+ΔLB2+ΔSB1+ΔSB2 (pooled) | 0,1 |" in text
+    assert "oracle (noise std 0.01, language blind 1): contrast ΔLB1+ΔLB2+ΔSB1+ΔSB2" in text
+    assert "## Policies on the same plan" in text and "| contrast-0 | blind-0 |" in text
+    assert "## Sensitivity" in text and "| ΔLB2 |" in text
+    assert "## Against the full i.i.d. evaluation" in text and "No estimation-error panel" not in text
+    assert all(f"**{name}**" in text for name in RUNS) and "`policy.language_blind=1.0`" in text
+    for figure in ("perturbations_spl.png", "error_vs_cost_spl.png", "trials_vs_cost.png"):
+        assert f"]({figure})" in text
+        height, width, _ = imread(out / figure).shape
+        assert width > 600 and height > 400
+
+
+def test_without_a_standard_run_the_report_says_why_the_error_panel_is_missing(runs):
+    assert main([str(runs / "contrast-0")]) == 0
+    report = runs / "contrast-0" / "report"
+    text = (report / "report.md").read_text()
+    assert "No estimation-error panel: no standard run among the inputs" in text
+    assert not (report / "error_vs_cost_spl.png").exists() and (report / "trials_vs_cost.png").exists()
+
+
+def test_a_run_still_being_written_is_read_from_its_journal_without_touching_it(runs, tmp_path):
+    live = tmp_path / "live"
+    shutil.copytree(runs / "contrast-1", live)
+    (live / "results.parquet").unlink()
+    (live / "summary.json").unlink()
+    journal = live / "journal.jsonl"
+    lines = journal.read_bytes().splitlines(keepends=True)
+    torn = b"".join(lines[:3]) + lines[3][:40]  # the writer is mid-line
+    journal.write_bytes(torn)
+    run = load_run(str(live))
+    assert len(run.results) == 3 and not run.complete
+    assert journal.read_bytes() == torn
+    assert main([str(live)]) == 0
+    assert "live is incomplete" in (live / "report" / "report.md").read_text()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        ([], "error: the following arguments are required: RUN_DIR (see --help)"),
+        (["{missing}"], "error: {missing}: no such run directory; pass directories written by lerobot_contrast.eval"),
+        (
+            ["{empty}"],
+            "error: {empty}: not a run directory (no config.json); pass the folder lerobot_contrast.eval wrote",
+        ),
+        (["{run}", "--metric=speed"], "error: argument --metric: invalid choice: 'speed'"),
+        (["{run}", "--output_dir={blocked}/report"], "error: --output_dir: cannot write to {blocked}/report"),
+    ],
+)
+def test_bad_input_gets_one_line_naming_what_is_wrong(runs, tmp_path, capsys, args, message):
+    paths = {"missing": tmp_path / "nope", "empty": tmp_path, "run": runs / "standard-0", "blocked": tmp_path / "file"}
+    (tmp_path / "file").write_text("not a directory")
+    assert main([a.format(**paths) for a in args]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and err.startswith(message.format(**paths))
+
+
+def test_the_module_runs_as_a_command(tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "lerobot_contrast.report", str(tmp_path / "nope")], capture_output=True, text=True
+    )
+    assert (
+        result.returncode == 2
+        and result.stderr
+        == f"error: {tmp_path / 'nope'}: no such run directory; pass directories written by lerobot_contrast.eval\n"
+    )
