@@ -141,9 +141,17 @@ def merge_episodes(run_dir: Path, records: Sequence[TrialRecord], output: Path) 
     return output, missing
 
 
+def rerun_binary() -> str:
+    """The `rerun` executable shipped in the rerun-sdk wheel (its `rerun_cli` wrapper would leave it running
+    when stopped), or RERUN_CLI_PATH as that wrapper honours it."""
+    import rerun_cli
+
+    return os.environ.get("RERUN_CLI_PATH") or str(Path(rerun_cli.__file__).with_name("rerun"))
+
+
 def viewer_command(path: Path, web: bool, web_port: int, grpc_port: int) -> list[str]:
-    """The Rerun CLI from the installed rerun-sdk: the native viewer, or the web viewer bound to localhost."""
-    command = [sys.executable, "-m", "rerun_cli"]
+    """The native viewer on `path`, or the web viewer and the recording served on localhost only."""
+    command = [rerun_binary()]
     if web:
         command += ["--serve-web", "--bind", "127.0.0.1", "--web-viewer-port", str(web_port), "--port", str(grpc_port)]
     return [*command, str(path)]

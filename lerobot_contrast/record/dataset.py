@@ -1,6 +1,7 @@
 """Every trial as an episode of a LeRobotDataset v3 in `run_dir/dataset/`, with per-frame `eval.*` columns,
-`next.success` on the last frame and a contrast-set sidecar in `meta/contrast_eval/`. Frames are added on a
-worker thread and videos are encoded while the episode runs, so the control loop only builds each frame."""
+`next.success` on the last frame and a contrast-set sidecar in `meta/contrast_eval/`. Frames are buffered while
+the episode runs and handed to LeRobot (validation, video encoding) when it ends, so the control loop only
+builds and copies each frame and no encoder competes with it for the CPU."""
 
 from __future__ import annotations
 
@@ -63,6 +64,7 @@ class DatasetRecorder:
         repo_id: str | None = None,
         robot_type: str | None = None,
         use_videos: bool = True,
+        max_buffer_mb: float = 512.0,
     ) -> None:
         self.run_dir = Path(run_dir)
         self.root = self.run_dir / DATASET_DIR
@@ -70,12 +72,16 @@ class DatasetRecorder:
         self.repo_id = repo_id or "local/" + re.sub(r"[^A-Za-z0-9_.-]+", "_", self.run_dir.resolve().name)
         self.robot_type = robot_type
         self.use_videos = use_videos
+        self.max_buffer_bytes = int(max_buffer_mb * 2**20)
         self.dataset: LeRobotDataset | None = None
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="dataset-frames")
         self._futures: list[Future[None]] = []
         self._context: TrialContext | None = None
         self._features: dict[str, dict] = {}
+        self._image_keys: list[str] = []
         self._pending: dict[str, Any] | None = None
+        self._buffer: list[dict[str, Any]] = []
+        self._buffered_bytes = 0
         self._frames = 0
 
     def start(self, context: TrialContext, features: dict[str, dict], pose_keys: tuple[str, str] | None) -> None:
@@ -83,8 +89,9 @@ class DatasetRecorder:
         if self.dataset is None:
             self.dataset = self._open(wanted)
         self._features = wanted
+        self._image_keys = [k for k, v in wanted.items() if v["dtype"] in ("video", "image")]
         self._context = context
-        self._pending, self._futures, self._frames = None, [], 0
+        self._pending, self._futures, self._buffer, self._buffered_bytes, self._frames = None, [], [], 0, 0
 
     def step(self, timestamp_s: float, observation: dict[str, Any], action: dict[str, Any]) -> None:
         context = self._require_context("step")
@@ -92,9 +99,8 @@ class DatasetRecorder:
             **build_dataset_frame(self._features, observation, "observation"),
             **build_dataset_frame(self._features, action, "action"),
         }
-        for key, value in frame.items():
-            if self._features[key]["dtype"] in ("video", "image"):
-                frame[key] = np.array(value, copy=True)  # the robot may reuse its frame buffer
+        for key in self._image_keys:
+            frame[key] = np.array(frame[key], copy=True)  # the robot may reuse its frame buffer
         instance = context.instance
         frame.update(
             {
@@ -107,14 +113,15 @@ class DatasetRecorder:
         )
         # Held back one step: only the episode's end says whether the last frame was a success.
         if self._pending is not None:
-            self._add(self._pending, success=False, done=False)
+            self._hold(self._pending, success=False, done=False)
         self._pending = frame
 
     def end(self, outcome: Outcome, cost: float) -> EpisodeFiles:
         context = self._require_context("end")
         if self._pending is not None:
-            self._add(self._pending, success=bool(outcome.success), done=True)
+            self._hold(self._pending, success=bool(outcome.success), done=True)
         self._pending = None
+        self._drain()
         self._wait()
         self._context = None
         if self._frames == 0:  # an episode that ended before its first step has nothing to store
@@ -125,11 +132,11 @@ class DatasetRecorder:
         return EpisodeFiles(dataset_episode=episode)
 
     def discard(self) -> None:
-        self._pending = None
+        self._pending, self._buffer, self._buffered_bytes = None, [], 0
         for future in self._futures:
             future.cancel()
         self._wait(raise_errors=False)
-        if self.dataset is not None:
+        if self.dataset is not None and self.dataset.has_pending_frames():
             self.dataset.clear_episode_buffer()
         self._context = None
 
@@ -153,11 +160,20 @@ class DatasetRecorder:
             raise RuntimeError(f"DatasetRecorder.{method}() called outside an episode; call start() first")
         return self._context
 
-    def _add(self, frame: dict[str, Any], success: bool, done: bool) -> None:
+    def _hold(self, frame: dict[str, Any], success: bool, done: bool) -> None:
         frame["next.success"] = np.array([success])
         frame["next.done"] = np.array([done])
-        self._futures.append(self._worker.submit(self.dataset.add_frame, frame))
+        self._buffer.append(frame)
         self._frames += 1
+        self._buffered_bytes += sum(frame[k].nbytes for k in self._image_keys)
+        if self._buffered_bytes > self.max_buffer_bytes:  # a very long episode: hand it over in batches
+            self._drain()
+
+    def _drain(self) -> None:
+        """Hand the buffered frames, in order, to the worker thread that adds them to the dataset."""
+        for frame in self._buffer:
+            self._futures.append(self._worker.submit(self.dataset.add_frame, frame))
+        self._buffer, self._buffered_bytes = [], 0
 
     def _wait(self, raise_errors: bool = True) -> None:
         futures, self._futures = self._futures, []

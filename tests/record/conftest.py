@@ -13,7 +13,7 @@ from lerobot_contrast.record.dataset import DatasetRecorder
 from lerobot_contrast.record.rerun_log import RerunEpisodeRecorder
 from tests.record.lt_episodes import Episodes, contexts, record_run
 
-STEPS = 8
+STEPS = 12  # long enough for the oracle to succeed in some trials and fail in others
 
 
 @pytest.fixture(scope="session")

@@ -140,3 +140,14 @@ def test_an_episode_without_steps_stores_nothing(tmp_path):
     recorder.close()
     assert files.dataset_episode is None
     assert json.loads((tmp_path / "dataset" / "meta" / "info.json").read_text())["total_episodes"] == 0
+
+
+def test_a_long_episode_is_handed_to_lerobot_in_batches_without_changing_the_dataset(tmp_path):
+    episodes, (context,) = Episodes(), contexts(perturbations=())
+    frame_mb = 180 * 320 * 3 / 2**20
+    recorder = DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID, max_buffer_mb=2.5 * frame_mb)
+    episode(recorder, episodes, context, steps=7)
+    recorder.close()
+    dataset = load(tmp_path)
+    assert dataset.num_episodes == 1 and [int(dataset[k]["frame_index"]) for k in range(7)] == list(range(7))
+    assert [bool(dataset[k]["next.success"]) for k in range(7)] == [False] * 6 + [True]
