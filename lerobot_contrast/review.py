@@ -5,11 +5,13 @@ in the Rerun viewer, or serve the web viewer on localhost (`--web`, works offlin
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import subprocess
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from urllib.parse import quote
 
 import rerun as rr
 import rerun.blueprint as rrb
@@ -17,7 +19,7 @@ import rerun.blueprint as rrb
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.trial import TrialRecord
-from lerobot_contrast.record.journal import Journal
+from lerobot_contrast.record.journal import JOURNAL_VERSION
 from lerobot_contrast.record.rerun_log import APPLICATION_ID
 
 try:  # rerun-sdk 0.38+ moved the chunk API out of `experimental`
@@ -35,10 +37,20 @@ class ReviewError(UserError):
 
 
 def load_records(run_dir: Path) -> list[TrialRecord]:
+    """The journal's records, read without touching the file: the run may still be writing it."""
     journal = run_dir / "journal.jsonl"
     if not journal.is_file():
         raise ReviewError(f"{run_dir}: no journal.jsonl; pass a run directory written by lerobot_contrast.eval")
-    return Journal.open(journal).records
+    complete = journal.read_text(encoding="utf-8").split("\n")[:-1]  # after the last newline: a line being written
+    records = []
+    for number, line in enumerate(complete, start=1):
+        data = json.loads(line) if line.strip() else None
+        if data is not None and data.get("version") != JOURNAL_VERSION:
+            raise ReviewError(
+                f"{journal}: line {number} has journal version {data.get('version')!r}, not {JOURNAL_VERSION}"
+            )
+        records += [] if data is None else [TrialRecord.from_json(data)]
+    return records
 
 
 def _names(values: str | None) -> list[str] | None:
@@ -165,7 +177,8 @@ def open_viewer(path: Path, web: bool, web_port: int, grpc_port: int) -> int:
     command = viewer_command(path, web, web_port, grpc_port)
     if not web:
         return subprocess.run(command, check=False).returncode
-    print(f"serving {path} at http://127.0.0.1:{web_port} (works offline); Ctrl-C stops", flush=True)
+    url = f"http://127.0.0.1:{web_port}/?url=" + quote(f"rerun+http://127.0.0.1:{grpc_port}/proxy", safe="")
+    print(f"open {url} in a browser (works offline); Ctrl-C stops", flush=True)
     server = subprocess.Popen(command)
     try:
         return server.wait()

@@ -120,37 +120,11 @@ def _configs(has_frames: bool) -> list[dict[str, Any]]:
     return configs
 
 
-def dataset_card(run_dir: Path, repo_id: str, endpoint: str, has_frames: bool) -> str:
-    config = json.loads((run_dir / "config.json").read_text(encoding="utf-8"))
-    summary = json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
-    task, policy = config.get("task", "?"), _evaluated(config)[0][1].strip("`")
-    data = DatasetCardData(
-        pretty_name=f"Contrast-set evaluation: {policy} on {task}",
-        task_categories=["robotics"],
-        tags=["LeRobot", "lerobot-contrast", "contrast-sets", "evaluation"],
-        configs=_configs(has_frames),
-    )
+def _method(config: dict[str, Any], summary: dict[str, Any]) -> list[str]:
+    budget, unit = config.get("budget"), _get(summary, "settings.cost_unit") or ""
+    spent = summary.get("overall", {}).get("cumulative_cost", 0.0)
     names = [n for n in summary.get("per_perturbation", {}) if n != "original"]
-    report, figures = _report(run_dir)
-    budget = config.get("budget")
-    unit = _get(summary, "settings.cost_unit") or ""
-    overall = summary.get("overall", {})
-    url = f"{endpoint}/datasets/{repo_id}/resolve/main"
-    episodes = sorted(p.relative_to(run_dir).as_posix() for p in run_dir.glob("rerun/episode_*.rrd"))
-    lines = [
-        f"# Contrast-set evaluation of `{policy}` on `{task}`",
-        "",
-        "Made with lerobot-contrast, a LeRobot plugin. One row of `results.parquet` per trial; every episode can be",
-        "replayed in Rerun.",
-        "",
-        "## What was evaluated",
-        "",
-        "| | |",
-        "|---|---|",
-        *(f"| {k} | {v} |" for k, v in _evaluated(config)),
-        "",
-        "## Method",
-        "",
+    return [
         f"Contrast sets ([Anwar, Gupta and Thomason, CoRL 2024]({PAPER})): each i.i.d. test instance is followed by",
         "small, specific perturbations run in the scene the robot left behind, within an experimenter-cost budget.",
         "",
@@ -158,32 +132,29 @@ def dataset_card(run_dir: Path, repo_id: str, endpoint: str, has_frames: bool) -
         "|---|---|---|",
         *(f"| {a} | {c} | {b} |" for a, c, b in AXES),
         "",
-        f"- strategy: `{config.get('strategy', '?')}`, order `{config.get('order', 'iid')}`, {config.get('n_instances', '?')} base "
-        f"instances, {config.get('repeats', 1)} repeat(s), seed {config.get('seed', '?')}",
+        f"- strategy: `{config.get('strategy', '?')}`, order `{config.get('order', 'iid')}`, "
+        f"{config.get('n_instances', '?')} base instances, {config.get('repeats', 1)} repeat(s), seed {config.get('seed', '?')}",
         f"- budget: {'none' if budget is None else f'{budget:g} {unit}'} (cost model `{config.get('cost', '?')}`); "
-        f"spent {overall.get('cumulative_cost', 0.0):.2f} {unit}; run {'complete' if summary.get('complete') else 'incomplete'}",
+        f"spent {spent:.2f} {unit}; run {'complete' if summary.get('complete') else 'incomplete'}",
         "- perturbations:",
         *_perturbations(config, names),
-        "",
-        "## Results",
-        "",
-        *(report or _summary_table(summary)),
-        "",
-        *(line for figure in figures for line in (figure, "")),
-        "## Files",
-        "",
+    ]
+
+
+def _files(has_frames: bool) -> list[str]:
+    lines = [
         "- `results.parquet` (config `results`): one row per trial: instance, perturbation, staging, cost, metrics",
         "- `summary.json`, `config.json`, `journal.jsonl`: the summary, every setting (rebuilds the plan), the journal",
         "- `rerun/episode_NNNNNN.rrd`: one Rerun recording per episode (camera, scene map, instruction, actions,"
         " outcome); `rerun/episode_layout.rbl` lays several out alike",
-        *(
-            ["- `dataset/`: the episodes as a LeRobotDataset v3 (config `frames`), with `eval.*` columns"]
-            if has_frames
-            else []
-        ),
-        "",
-        "## Use it",
-        "",
+    ]
+    if has_frames:
+        lines.append("- `dataset/`: the episodes as a LeRobotDataset v3 (config `frames`), with `eval.*` columns")
+    return lines
+
+
+def _usage(repo_id: str, episode_url: str | None) -> list[str]:
+    return [
         "```python",
         "from datasets import load_dataset",
         "",
@@ -198,13 +169,37 @@ def dataset_card(run_dir: Path, repo_id: str, endpoint: str, has_frames: bool) -
         "# review episodes: each base instance beside its perturbations",
         f"hf download {repo_id} --repo-type dataset --local-dir run",
         "python -m lerobot_contrast.review run --perturbation=original,LB1 --web",
-        *([f"rerun {url}/{episodes[0]}  # or open one episode directly"] if episodes else []),
-        "```",
-        "",
-        "## Citation",
-        "",
-        "```bibtex",
-        CITATION,
+        *([f"rerun {episode_url}  # or open one episode directly"] if episode_url else []),
         "```",
     ]
-    return f"---\n{data.to_yaml()}\n---\n\n" + "\n".join(lines) + "\n"
+
+
+def dataset_card(run_dir: Path, repo_id: str, endpoint: str, has_frames: bool) -> str:
+    """README.md for the run's dataset repo: YAML metadata (viewer configs, tags), then the sections."""
+    config = json.loads((run_dir / "config.json").read_text(encoding="utf-8"))
+    summary = json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
+    evaluated = _evaluated(config)
+    task, policy = config.get("task", "?"), evaluated[0][1].strip("`")
+    data = DatasetCardData(
+        pretty_name=f"Contrast-set evaluation: {policy} on {task}",
+        task_categories=["robotics"],
+        tags=["LeRobot", "lerobot-contrast", "contrast-sets", "evaluation"],
+        configs=_configs(has_frames),
+    )
+    report, figures = _report(run_dir)
+    episodes = sorted(p.relative_to(run_dir).as_posix() for p in run_dir.glob("rerun/episode_*.rrd"))
+    episode_url = f"{endpoint}/datasets/{repo_id}/resolve/main/{episodes[0]}" if episodes else None
+    sections = [
+        (f"# Contrast-set evaluation of `{policy}` on `{task}`", [
+            "Made with lerobot-contrast, a LeRobot plugin. One row of `results.parquet` per trial; every episode",
+            "can be replayed in Rerun.",
+        ]),
+        ("## What was evaluated", ["| | |", "|---|---|", *(f"| {k} | {v} |" for k, v in evaluated)]),
+        ("## Method", _method(config, summary)),
+        ("## Results", [*(report or _summary_table(summary)), *(line for f in figures for line in ("", f))]),
+        ("## Files", _files(has_frames)),
+        ("## Use it", _usage(repo_id, episode_url)),
+        ("## Citation", ["```bibtex", CITATION, "```"]),
+    ]  # fmt: skip
+    body = "\n\n".join(heading + "\n\n" + "\n".join(lines) for heading, lines in sections)
+    return f"---\n{data.to_yaml()}\n---\n\n{body}\n"

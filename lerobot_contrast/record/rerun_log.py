@@ -59,7 +59,8 @@ def episode_views(cameras: list[str], bounds: MapBounds | None, prefix: str = ""
         rrb.TimeSeriesView(origin=f"{prefix}/action", name=f"{name}action"),
         rrb.TimeSeriesView(origin=f"{prefix}/state", name=f"{name}state"),
     ]
-    return rrb.Horizontal(rrb.Vertical(*spatial, map_view), rrb.Vertical(*text, *series), column_shares=[3, 2])
+    right = rrb.Vertical(*text, *series, row_shares=[3, 2, 2, 2])
+    return rrb.Horizontal(rrb.Vertical(*spatial, map_view), right, column_shares=[3, 2])
 
 
 def _jpeg(image: np.ndarray, quality: int) -> bytes:

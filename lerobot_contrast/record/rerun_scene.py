@@ -128,16 +128,32 @@ def log_map(
         static=True,
     )
     _log_base_changes(recording, context, radius)
-    goal = goal_position(task, context)
-    if goal is not None:
-        label = f"goal ({context.instance.goal['block']})" if "block" in context.instance.goal else "goal"
-        recording.log(
-            "map/goal",
-            rr.Points2D(map_xy([goal]), radii=radius * 1.4, colors=[(255, 215, 0, 160)], labels=[label]),
-            static=True,
-        )
+    _log_goal(recording, context, task, radius)
     if poses:
         recording.log("map/path", rr.LineStrips2D([map_xy(poses)], colors=[(200, 200, 200)]), static=True)
+        # Style of the robot's per-frame position, which is sent with the other streams.
+        recording.log("map/robot", rr.Points2D.from_fields(radii=radius * 0.7, colors=[(255, 255, 255)]), static=True)
+
+
+def _log_goal(recording: rr.RecordingStream, context: TrialContext, task: Any, radius: float) -> None:
+    """The goal region, and an arrow to it from the object the instruction moves."""
+    goal = goal_position(task, context)
+    if goal is None:
+        return
+    gold = (255, 215, 0)
+    block = context.instance.scene.objects.get(context.instance.goal.get("block"))
+    recording.log(
+        "map/goal",
+        rr.Points2D(map_xy([goal]), radii=radius * 1.4, colors=[(*gold, 120)], labels=None if block else ["goal"]),
+        static=True,
+    )
+    if block is not None:
+        start = map_xy([(block.x, block.y)])
+        recording.log(
+            "map/goal_arrow",
+            rr.Arrows2D(origins=start, vectors=map_xy([goal]) - start, colors=[gold], labels=["goal"]),
+            static=True,
+        )
 
 
 def _log_base_changes(recording: rr.RecordingStream, context: TrialContext, radius: float) -> None:
