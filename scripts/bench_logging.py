@@ -4,8 +4,8 @@ LeRobotDataset recording, on one CPU core (the observers' worker threads share i
 A step's busy time is everything the loop thread does in one control period (read the observation, act, log,
 step the simulator) before it sleeps until the next tick. Overhead per step = busy time with the observer minus
 busy time of the bare loop, in ms and as a fraction of the 100 ms control period. Episodes of the three variants
-are interleaved so machine load affects them alike. `end()` (writing the episode after the loop) is reported
-separately: it runs between episodes, when the robot is idle.
+are interleaved so machine load affects them alike. `start()` and `end()` (opening the dataset, writing the
+episode) are reported separately: they run between episodes, when the robot is idle.
 Usage: python scripts/bench_logging.py [--episodes 4] [--steps 40]. The last line is machine-readable.
 """
 
@@ -56,7 +56,7 @@ class Timings:
     name: str
     busy_s: list[float] = field(default_factory=list)
     observer_s: list[float] = field(default_factory=list)
-    end_s: list[float] = field(default_factory=list)
+    start_end_s: list[float] = field(default_factory=list)
     late: int = 0
 
     def busy_ms(self) -> float:
@@ -99,7 +99,9 @@ def run_episode(env: gym.Env, task: Any, trial: TrialContext, observer: Any, ste
     obs, _ = env.reset(seed=0, options={"instance": trial.instance})
     policy = OraclePolicy(env, task, {trial.instance.id: trial.instance})
     policy.reset(trial.instance, np.random.default_rng(0))
+    start = time.perf_counter()
     observer.start(trial, FEATURES, POSE_KEYS)
+    between = time.perf_counter() - start
     tick = time.perf_counter()
     for k in range(steps):
         start = time.perf_counter()
@@ -116,20 +118,20 @@ def run_episode(env: gym.Env, task: Any, trial: TrialContext, observer: Any, ste
     outcome = Outcome(success=False, steps=steps, path_length=0.0, scene_after=env.unwrapped.scene(), duration_s=0.0)
     start = time.perf_counter()
     observer.end(outcome, 0.0)
-    timings.end_s.append(time.perf_counter() - start)
+    timings.start_end_s.append(between + time.perf_counter() - start)
 
 
 def print_table(bare: Timings, others: list[Timings]) -> None:
     print(f"one core (cpu {CPU}); {len(bare.busy_s)} steps per variant at {1 / PERIOD_S:.0f} Hz; times per step")
     header = f"{'variant':<10}{'busy ms':>9}{'p95 ms':>8}{'observer ms':>13}{'overhead ms':>13}{'of period':>11}"
-    print(header + f"{'late':>6}{'end() ms':>10}")
+    print(header + f"{'late':>6}{'start+end ms':>14}")
     for t in [bare, *others]:
         overhead = t.busy_ms() - bare.busy_ms()
-        end = 1000 * float(np.mean(t.end_s)) if t is not bare else 0.0
+        between = 1000 * float(np.mean(t.start_end_s))
         print(
             f"{t.name:<10}{t.busy_ms():>9.2f}{1000 * np.percentile(t.busy_s, 95):>8.2f}"
             f"{1000 * np.mean(t.observer_s):>13.3f}{overhead:>13.3f}{overhead / (1000 * PERIOD_S):>11.4f}"
-            f"{t.late:>6}{end:>10.1f}"
+            f"{t.late:>6}{between:>14.1f}"
         )
 
 
@@ -163,7 +165,8 @@ def main(argv: list[str] | None = None) -> None:
     print(
         f"rerun_overhead_frac={rerun_ms / period_ms:.4f} dataset_overhead_frac={dataset_ms / period_ms:.4f} "
         f"rerun_overhead_ms={rerun_ms:.3f} dataset_overhead_ms={dataset_ms:.3f} bare_step_ms={bare.busy_ms():.3f} "
-        f"rerun_end_ms={1000 * np.mean(rerun.end_s):.1f} dataset_end_ms={1000 * np.mean(dataset.end_s):.1f}"
+        f"rerun_start_end_ms={1000 * np.mean(rerun.start_end_s):.1f} "
+        f"dataset_start_end_ms={1000 * np.mean(dataset.start_end_s):.1f}"
     )
 
 

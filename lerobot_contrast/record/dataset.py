@@ -1,7 +1,8 @@
 """Every trial as an episode of a LeRobotDataset v3 in `run_dir/dataset/`, with per-frame `eval.*` columns,
 `next.success` on the last frame and a contrast-set sidecar in `meta/contrast_eval/`. Frames are buffered while
 the episode runs and handed to LeRobot (validation, video encoding) when it ends, so the control loop only
-builds and copies each frame and no encoder competes with it for the CPU."""
+builds and copies each frame and no encoder competes with it for the CPU. Each saved episode is finalized at
+once, so a run killed at any point keeps every episode it finished."""
 
 from __future__ import annotations
 
@@ -128,6 +129,9 @@ class DatasetRecorder:
             return EpisodeFiles()
         episode = int(self.dataset.meta.total_episodes)
         self.dataset.save_episode()
+        # LeRobot writes parquet footers only when finalizing; the next episode resumes into new files.
+        self.dataset.finalize()
+        self.dataset = None
         self._append_sidecar(_episode_row(episode, context, outcome, cost))
         return EpisodeFiles(dataset_episode=episode)
 
@@ -144,15 +148,19 @@ class DatasetRecorder:
         if self._context is not None:
             self.discard()
         self._worker.shutdown(wait=True)
-        if self.dataset is None:
+        if self.dataset is not None:
+            self.dataset.finalize()
+            self.dataset = None
+        info_path = self.root / "meta" / "info.json"
+        if not info_path.exists():
             return
-        self.dataset.finalize()
         sidecar = self.root / SIDECAR_DIR
         sidecar.mkdir(parents=True, exist_ok=True)
         for name in RUN_FILES:
             if (self.run_dir / name).exists():
                 shutil.copyfile(self.run_dir / name, sidecar / name)
-        info = {"version": SIDECAR_VERSION, "repo_id": self.repo_id, "episodes": int(self.dataset.meta.total_episodes)}
+        episodes = json.loads(info_path.read_text(encoding="utf-8"))["total_episodes"]
+        info = {"version": SIDECAR_VERSION, "repo_id": self.repo_id, "episodes": episodes}
         (sidecar / "run.json").write_text(json.dumps(info, indent=2) + "\n", encoding="utf-8")
 
     def _require_context(self, method: str) -> TrialContext:
@@ -187,6 +195,11 @@ class DatasetRecorder:
     def _open(self, features: dict[str, dict]) -> LeRobotDataset:
         info_path = self.root / "meta" / "info.json"
         if info_path.exists() and json.loads(info_path.read_text(encoding="utf-8")).get("total_episodes", 0) > 0:
+            if not any((self.root / "meta" / "episodes").glob("*/*.parquet")):  # else LeRobot would ask the Hub
+                raise DatasetError(
+                    f"{self.root} is damaged (the run stopped while saving an episode); move it aside to record "
+                    "into a new dataset (the journal and the Rerun files are unaffected)"
+                )
             dataset = LeRobotDataset.resume(self.repo_id, root=self.root, streaming_encoding=self.use_videos)
             _check_features(self.root, dataset.meta.features, features)
             return dataset

@@ -2,6 +2,7 @@
 and a resume, and plays with `lerobot-dataset-viz`."""
 
 import json
+import shutil
 import subprocess
 import sys
 
@@ -151,3 +152,40 @@ def test_a_long_episode_is_handed_to_lerobot_in_batches_without_changing_the_dat
     dataset = load(tmp_path)
     assert dataset.num_episodes == 1 and [int(dataset[k]["frame_index"]) for k in range(7)] == list(range(7))
     assert [bool(dataset[k]["next.success"]) for k in range(7)] == [False] * 6 + [True]
+
+
+@pytest.mark.slow
+def test_a_run_killed_mid_episode_keeps_every_finished_episode(tmp_path):
+    code = (
+        "import os, sys\n"
+        "from tests.record.lt_episodes import Episodes, contexts\n"
+        "from tests.record.test_dataset import REPO_ID, episode\n"
+        "from lerobot_contrast.record.dataset import DatasetRecorder\n"
+        "episodes, trials = Episodes(), contexts(perturbations=('LB1', 'SB1'))\n"
+        "recorder = DatasetRecorder(sys.argv[1], fps=10, repo_id=REPO_ID)\n"
+        "episode(recorder, episodes, trials[0])\n"
+        "episode(recorder, episodes, trials[1])\n"
+        "recorder.step = lambda *args, real=recorder.step: (real(*args), os._exit(9))\n"
+        "episode(recorder, episodes, trials[2])\n"
+    )
+    killed = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert killed.returncode == 9, killed.stderr[-2000:]
+    assert load(tmp_path).num_episodes == 2  # readable as left, without close()
+    episodes, trials = Episodes(), contexts(perturbations=("LB1", "SB1"))
+    resumed = DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID)
+    assert episode(resumed, episodes, trials[2]).dataset_episode == 2
+    resumed.close()
+    dataset = load(tmp_path)
+    assert dataset.num_episodes == 3 and [int(dataset[k]["eval.trial_index"]) for k in (0, 4, 8)] == [0, 1, 2]
+
+
+def test_a_dataset_damaged_while_saving_is_refused_with_advice_not_fetched_from_the_hub(tmp_path):
+    episodes, (context,) = Episodes(), contexts(perturbations=())
+    recorder = DatasetRecorder(tmp_path, fps=10)
+    episode(recorder, episodes, context)
+    recorder.close()
+    shutil.rmtree(tmp_path / "dataset" / "meta" / "episodes")
+    resumed = DatasetRecorder(tmp_path, fps=10)
+    with pytest.raises(DatasetError, match="is damaged .*; move it aside"):
+        resumed.start(context, FEATURES, POSE_KEYS)
+    resumed.close()
