@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 from collections.abc import Sequence
@@ -95,7 +96,8 @@ def episode_title(record: TrialRecord) -> str:
 
 
 def entity_prefix(record: TrialRecord) -> str:
-    return f"/episodes/trial_{record.index:06d}_{record.perturbation or ORIGINAL}"
+    name = re.sub(r"[^A-Za-z0-9_-]+", "_", record.perturbation or ORIGINAL)
+    return f"/episodes/trial_{record.index:06d}_{name}"
 
 
 def _remap(path: str, prefix: str) -> str | None:
@@ -123,20 +125,20 @@ def merge_episodes(run_dir: Path, records: Sequence[TrialRecord], output: Path) 
     instance with its episodes side by side; all share the `frame` and `time` timelines, so they play in step.
 
     Returns the merged file and the episode files that were missing."""
-    chunks, cameras, missing, tabs = [], {}, [], {}
+    chunks, missing, tabs = [], [], {}
     for record in records:
         path = run_dir / str(record.rerun_path)
         if not path.is_file():
             missing.append(str(record.rerun_path))
             continue
-        prefix = entity_prefix(record)
+        prefix, cameras = entity_prefix(record), set()
         for chunk in RrdReader(path).stream().to_chunks():
             target = _remap(chunk.entity_path, prefix)
             if target is not None:
                 chunks.append(chunk.with_entity_path(target))
             if chunk.entity_path.startswith("/camera/"):
-                cameras.setdefault(record.index, set()).add(chunk.entity_path.removeprefix("/camera/"))
-        tabs.setdefault(record.base_id, []).append(_cell(record, sorted(cameras.get(record.index, ()))))
+                cameras.add(chunk.entity_path.removeprefix("/camera/"))
+        tabs.setdefault(record.base_id, []).append(_cell(record, sorted(cameras)))
     if not tabs:
         raise ReviewError(f"none of the selected episode files exist under {run_dir}")
     blueprint = rrb.Blueprint(rrb.Tabs(*(rrb.Horizontal(*cells, name=base) for base, cells in tabs.items())))
@@ -158,7 +160,8 @@ def rerun_binary() -> str:
     when stopped), or RERUN_CLI_PATH as that wrapper honours it."""
     import rerun_cli
 
-    return os.environ.get("RERUN_CLI_PATH") or str(Path(rerun_cli.__file__).with_name("rerun"))
+    name = "rerun.exe" if sys.platform.startswith("win") else "rerun"
+    return os.environ.get("RERUN_CLI_PATH") or str(Path(rerun_cli.__file__).with_name(name))
 
 
 def viewer_command(path: Path, web: bool, web_port: int, grpc_port: int) -> list[str]:
