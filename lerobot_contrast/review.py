@@ -1,0 +1,237 @@
+"""`python -m lerobot_contrast.review RUN_DIR`: pick a run's episodes by perturbation, outcome or base instance,
+merge their Rerun recordings so each base instance and its perturbations sit side by side, and open the result
+in the Rerun viewer, or serve the web viewer on localhost (`--web`, works offline)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from urllib.parse import quote
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.contrast.trial import TrialRecord
+from lerobot_contrast.record.journal import JOURNAL_VERSION
+from lerobot_contrast.record.rerun_log import APPLICATION_ID
+
+try:  # rerun-sdk 0.38+ moved the chunk API out of `experimental`
+    from rerun.chunk import RrdReader, send_chunks
+except ImportError:
+    from rerun.experimental import RrdReader, send_chunks
+
+ORIGINAL = "original"
+OUTCOMES = ("success", "failure")
+DEFAULT_OUTPUT = Path("review") / "review.rrd"
+
+
+class ReviewError(UserError):
+    pass
+
+
+def load_records(run_dir: Path) -> list[TrialRecord]:
+    """The journal's records, read without touching the file: the run may still be writing it."""
+    journal = run_dir / "journal.jsonl"
+    if not journal.is_file():
+        raise ReviewError(f"{run_dir}: no journal.jsonl; pass a run directory written by lerobot_contrast.eval")
+    complete = journal.read_text(encoding="utf-8").split("\n")[:-1]  # after the last newline: a line being written
+    records = []
+    for number, line in enumerate(complete, start=1):
+        data = json.loads(line) if line.strip() else None
+        if data is not None and data.get("version") != JOURNAL_VERSION:
+            raise ReviewError(
+                f"{journal}: line {number} has journal version {data.get('version')!r}, not {JOURNAL_VERSION}"
+            )
+        records += [] if data is None else [TrialRecord.from_json(data)]
+    return records
+
+
+def _names(values: str | None) -> list[str] | None:
+    if values is None:
+        return None
+    return [v.strip().removeprefix("Δ") for v in values.split(",") if v.strip()]
+
+
+def select(
+    records: Sequence[TrialRecord],
+    perturbation: str | None = None,
+    outcome: str | None = None,
+    base: str | None = None,
+) -> list[TrialRecord]:
+    """The recorded episodes matching every given filter, grouped by base instance (originals first)."""
+    if outcome is not None and outcome not in OUTCOMES:
+        raise ReviewError(f"--outcome must be one of {', '.join(OUTCOMES)}, got {outcome!r}")
+    recorded = [r for r in records if r.status == "done" and r.rerun_path]
+    perturbations, bases = _names(perturbation), _names(base)
+    chosen = [
+        r
+        for r in recorded
+        if (perturbations is None or (r.perturbation or ORIGINAL) in perturbations)
+        and (outcome is None or bool(r.success) == (outcome == "success"))
+        and (bases is None or r.base_id in bases)
+    ]
+    if not recorded:
+        raise ReviewError("the run recorded no Rerun episodes (its journal names no .rrd files)")
+    if not chosen:
+        seen = sorted({r.perturbation or ORIGINAL for r in recorded})
+        raise ReviewError(
+            f"no recorded episode matches the filters; this run has perturbations {', '.join(seen)} "
+            f"and {len({r.base_id for r in recorded})} base instances"
+        )
+    order = {base_id: k for k, base_id in enumerate(dict.fromkeys(r.base_id for r in chosen))}
+    return sorted(chosen, key=lambda r: (order[r.base_id], r.perturbation is not None, r.index))
+
+
+def episode_title(record: TrialRecord) -> str:
+    verdict = "✓" if record.success else "✗"
+    return f"{perturbation_label(record.perturbation)} · trial {record.index} {verdict}"
+
+
+def entity_prefix(record: TrialRecord) -> str:
+    name = re.sub(r"[^A-Za-z0-9_-]+", "_", record.perturbation or ORIGINAL)
+    return f"/episodes/trial_{record.index:06d}_{name}"
+
+
+def _remap(path: str, prefix: str) -> str | None:
+    """An episode's entity path inside the merged recording; its properties become ordinary static data."""
+    if path == "/__properties":  # the recording's name and start time: the merged recording has its own
+        return None
+    if path.startswith("/__properties/"):
+        return f"{prefix}/properties/{path.removeprefix('/__properties/')}"
+    return prefix + path
+
+
+def _cell(record: TrialRecord, cameras: list[str]) -> rrb.Container:
+    prefix = entity_prefix(record)
+    views = [rrb.Spatial2DView(origin=f"{prefix}/camera/{cam}", name=cam) for cam in cameras]
+    views += [
+        rrb.Spatial2DView(origin=f"{prefix}/map", name="map"),
+        rrb.TextDocumentView(origin=f"{prefix}/instruction", name="instruction"),
+        rrb.TextDocumentView(origin=f"{prefix}/outcome", name="outcome"),
+    ]
+    return rrb.Vertical(*views, name=episode_title(record))
+
+
+def merge_episodes(run_dir: Path, records: Sequence[TrialRecord], output: Path) -> tuple[Path, list[str]]:
+    """One recording holding each episode under `/episodes/trial_N_<perturbation>`, in one tab per base
+    instance with its episodes side by side; all share the `frame` and `time` timelines, so they play in step.
+
+    Returns the merged file and the episode files that were missing."""
+    chunks, missing, tabs = [], [], {}
+    for record in records:
+        path = run_dir / str(record.rerun_path)
+        if not path.is_file():
+            missing.append(str(record.rerun_path))
+            continue
+        prefix, cameras = entity_prefix(record), set()
+        for chunk in RrdReader(path).stream().to_chunks():
+            target = _remap(chunk.entity_path, prefix)
+            if target is not None:
+                chunks.append(chunk.with_entity_path(target))
+            if chunk.entity_path.startswith("/camera/"):
+                cameras.add(chunk.entity_path.removeprefix("/camera/"))
+        tabs.setdefault(record.base_id, []).append(_cell(record, sorted(cameras)))
+    if not tabs:
+        raise ReviewError(f"none of the selected episode files exist under {run_dir}")
+    blueprint = rrb.Blueprint(rrb.Tabs(*(rrb.Horizontal(*cells, name=base) for base, cells in tabs.items())))
+    output.parent.mkdir(parents=True, exist_ok=True)
+    partial = output.with_name(output.name + ".partial")
+    recording = rr.RecordingStream(APPLICATION_ID, recording_id=f"review-{run_dir.resolve().name}")
+    recording.save(partial, default_blueprint=blueprint)
+    recording.send_recording_name(f"review of {run_dir.resolve().name}")
+    recording.send_property("review", rr.AnyValues(trials=[r.index for r in records if r.rerun_path not in missing]))
+    send_chunks(chunks, recording=recording)
+    recording.flush(timeout_sec=60.0)
+    recording.disconnect()
+    os.replace(partial, output)
+    return output, missing
+
+
+def rerun_binary() -> str:
+    """The `rerun` executable shipped in the rerun-sdk wheel (its `rerun_cli` wrapper would leave it running
+    when stopped), or RERUN_CLI_PATH as that wrapper honours it."""
+    import rerun_cli
+
+    name = "rerun.exe" if sys.platform.startswith("win") else "rerun"
+    return os.environ.get("RERUN_CLI_PATH") or str(Path(rerun_cli.__file__).with_name(name))
+
+
+def viewer_command(path: Path, web: bool, web_port: int, grpc_port: int) -> list[str]:
+    """The native viewer on `path`, or the web viewer and the recording served on localhost only."""
+    command = [rerun_binary()]
+    if web:
+        command += ["--serve-web", "--bind", "127.0.0.1", "--web-viewer-port", str(web_port), "--port", str(grpc_port)]
+    return [*command, str(path)]
+
+
+def _has_display() -> bool:
+    return not sys.platform.startswith("linux") or bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def open_viewer(path: Path, web: bool, web_port: int, grpc_port: int) -> int:
+    command = viewer_command(path, web, web_port, grpc_port)
+    if not web:
+        return subprocess.run(command, check=False).returncode
+    url = f"http://127.0.0.1:{web_port}/?url=" + quote(f"rerun+http://127.0.0.1:{grpc_port}/proxy", safe="")
+    print(f"open {url} in a browser (works offline); Ctrl-C stops", flush=True)
+    server = subprocess.Popen(command)
+    try:
+        return server.wait()
+    except KeyboardInterrupt:
+        server.terminate()
+        server.wait(timeout=10)
+        return 0
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise ReviewError(f"{message} (see --help)")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="python -m lerobot_contrast.review", description=__doc__)
+    parser.add_argument("run_dir", type=Path, help="run directory written by lerobot_contrast.eval")
+    parser.add_argument("--perturbation", help="perturbations to show, e.g. LB1 or original,LB1,SB2")
+    parser.add_argument("--outcome", help="only episodes that ended in success or failure")
+    parser.add_argument("--base", help="base instance ids to show, e.g. lt-0003")
+    parser.add_argument("--web", action="store_true", help="serve the web viewer on localhost instead")
+    parser.add_argument("--web_port", type=int, default=9090, help="HTTP port of the web viewer")
+    parser.add_argument("--grpc_port", type=int, default=9876, help="port the viewer reads the recording from")
+    parser.add_argument("--output", type=Path, help=f"merged recording (default: RUN_DIR/{DEFAULT_OUTPUT})")
+    parser.add_argument("--save_only", action="store_true", help="write the merged recording and open nothing")
+    return parser
+
+
+def review(argv: Sequence[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    records = select(load_records(args.run_dir), args.perturbation, args.outcome, args.base)
+    if not (args.save_only or args.web or _has_display()):
+        raise ReviewError("no display to open the Rerun viewer on; pass --web to serve the web viewer on localhost")
+    output = args.output or args.run_dir / DEFAULT_OUTPUT
+    merged, missing = merge_episodes(args.run_dir, records, output)
+    if missing:
+        print(f"warning: {len(missing)} episode file(s) missing, left out: {', '.join(missing)}", file=sys.stderr)
+    print(f"{len(records) - len(missing)} episodes of {len({r.base_id for r in records})} base instances: {merged}")
+    if args.save_only:
+        return 0
+    return open_viewer(merged, args.web, args.web_port, args.grpc_port)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    try:
+        return review(argv)
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

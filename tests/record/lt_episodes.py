@@ -1,0 +1,173 @@
+"""Real Language-Table episodes for the observer tests: simulator frames in the robot's feature names."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import lerobot_contrast.sims  # noqa: F401  (registers the simulator)
+from lerobot_contrast.contrast.perturbation import perturb
+from lerobot_contrast.contrast.trial import Outcome, TrialRecord
+from lerobot_contrast.policies import OraclePolicy
+from lerobot_contrast.record.journal import Journal
+from lerobot_contrast.record.results import write_results
+from lerobot_contrast.record.run_dir import write_json_atomic
+from lerobot_contrast.record.summary import summarize
+from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
+from lerobot_contrast.tasks.language_table import LanguageTableTask
+
+FEATURES = {
+    "observation": {
+        "top": (180, 320, 3),
+        "effector.x": float,
+        "effector.y": float,
+        "effector_target.x": float,
+        "effector_target.y": float,
+    },
+    "action": {"delta_x": float, "delta_y": float},
+}
+POSE_KEYS = ("effector.x", "effector.y")
+SETTINGS = {"task": "language_table", "strategy": "contrast", "policy": "oracle", "cost_unit": "m"}
+
+
+def robot_observation(obs: dict[str, np.ndarray]) -> dict[str, Any]:
+    """The simulator's observation under the Language-Table robot's feature names."""
+    (ex, ey), (tx, ty) = obs["effector_translation"], obs["effector_target_translation"]
+    return {
+        "top": obs["rgb"],
+        "effector.x": float(ex),
+        "effector.y": float(ey),
+        "effector_target.x": float(tx),
+        "effector_target.y": float(ty),
+    }
+
+
+def contexts(perturbations: tuple[str, ...] = ("LB1", "SB1"), n_bases: int = 1, seed: int = 3) -> list[TrialContext]:
+    """Each base instance followed by those of `perturbations` that apply to it, numbered as trials."""
+    task = LanguageTableTask(families=("block2block",))
+    rng = np.random.default_rng(seed)
+    out: list[TrialContext] = []
+    for base in task.sample(n_bases, rng):
+        variants = [(base, None)]
+        for name in perturbations:
+            perturbation = task.perturbations.get(name)
+            instance = perturb(task, perturbation, base, rng)
+            if instance is not None:
+                variants.append((instance, perturbation.axis))
+        for instance, axis in variants:
+            out.append(
+                TrialContext(
+                    index=len(out),
+                    instance=instance,
+                    base=base,
+                    current=base.scene,
+                    planned_cost=0.0 if axis in (None, "L", "LB") else 0.05,
+                    staging="reset" if axis is None else "in_place",
+                    rng=np.random.default_rng([seed, len(out)]),
+                    planned_trials=0,
+                    axis=axis,
+                    settings=dict(SETTINGS),
+                )
+            )
+    for context in out:
+        object.__setattr__(context, "planned_trials", len(out))
+    return out
+
+
+class Episodes:
+    """Drives observers through oracle-controlled episodes of the simulator."""
+
+    def __init__(self) -> None:
+        self.env = gym.make("lerobot_contrast/LanguageTable-v0", obs_type="rgb")
+        self.task = LanguageTableTask(families=("block2block",))
+
+    def run(self, observer: Any, context: TrialContext, steps: int = 12) -> tuple[Outcome, EpisodeFiles]:
+        obs, _ = self.env.reset(seed=0, options={"instance": context.instance})
+        policy = OraclePolicy(self.env, self.task, {context.base.id: context.base})
+        policy.reset(context.instance, context.rng)
+        observer.start(context, FEATURES, POSE_KEYS)
+        start, path, success = time.perf_counter(), 0.0, False
+        for step in range(steps):
+            action = np.asarray(policy.act(obs), dtype=np.float32)
+            observer.step(
+                step / 10.0, robot_observation(obs), {"delta_x": float(action[0]), "delta_y": float(action[1])}
+            )
+            before = obs["effector_translation"]
+            obs, _, _, _, info = self.env.step(action)
+            path += float(np.hypot(*(obs["effector_translation"] - before)))
+            success = bool(info["is_success"])
+        outcome = Outcome(
+            success=success,
+            steps=steps,
+            path_length=path,
+            scene_after=self.env.unwrapped.scene(),
+            duration_s=time.perf_counter() - start,
+            reference_length=0.3,
+        )
+        return outcome, observer.end(outcome, context.planned_cost)
+
+
+def record_run(run_dir: Path, contexts: list[TrialContext], observers: list[Any], steps: int = 8) -> list[TrialRecord]:
+    """A run directory as the evaluation writes it, with every trial watched by `observers`: config, journal
+    (records naming the observers' files), results table and summary."""
+    run_dir.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(
+        run_dir / "config.json", {"task": "language_table", "strategy": "contrast", "policy": {"type": "oracle"}}
+    )
+    journal = Journal.open(run_dir / "journal.jsonl")
+    episodes = Episodes()
+    for context in contexts:
+        outcome, files = episodes.run(Fanout(observers), context, steps)
+        journal.append(
+            TrialRecord(
+                index=context.index,
+                base_id=context.base.id,
+                perturbation=context.instance.perturbation,
+                axis=context.axis,
+                family=context.instance.family,
+                staging=context.staging,
+                repeat=0,
+                status="done",
+                instance=context.instance,
+                cost=context.planned_cost,
+                cumulative_cost=0.0,
+                success=outcome.success,
+                steps=outcome.steps,
+                path_length=outcome.path_length,
+                scene_after=outcome.scene_after,
+                rerun_path=files.rerun_path,
+                dataset_episode=files.dataset_episode,
+            )
+        )
+    for observer in observers:
+        observer.close()
+    write_results(run_dir / "results.parquet", journal.records, {"strategy": "contrast"})
+    summary = summarize(journal.records, settings=dict(SETTINGS), complete=True)
+    write_json_atomic(run_dir / "summary.json", summary)
+    return journal.records
+
+
+class Fanout:
+    """Several observers as one, merging the files they report (as a runner with several observers does)."""
+
+    def __init__(self, observers: list[Any]) -> None:
+        self.observers = observers
+
+    def start(self, *args: Any) -> None:
+        for observer in self.observers:
+            observer.start(*args)
+
+    def step(self, *args: Any) -> None:
+        for observer in self.observers:
+            observer.step(*args)
+
+    def end(self, outcome: Outcome, cost: float) -> EpisodeFiles:
+        files = [observer.end(outcome, cost) for observer in self.observers]
+        return EpisodeFiles(
+            rerun_path=next((f.rerun_path for f in files if f.rerun_path), None),
+            dataset_episode=next((f.dataset_episode for f in files if f.dataset_episode is not None), None),
+        )
