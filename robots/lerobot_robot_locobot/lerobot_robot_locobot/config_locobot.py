@@ -23,7 +23,8 @@ class LocobotConfig(RobotConfig):
     connect_timeout_s: float = 5.0
     # Seconds one discrete step may take on the robot before send_action fails.
     step_timeout_s: float = 15.0
-    # get_observation fails when the host has sent nothing for this long (a stale image is never returned).
+    # get_observation waits this long for a fresh observation (published within the last three publishing
+    # periods of the host), then fails: a stale image is never returned.
     observation_timeout_s: float = 2.0
     # How long get_observation waits for a newer observation before returning the latest one received.
     polling_timeout_ms: int = 15

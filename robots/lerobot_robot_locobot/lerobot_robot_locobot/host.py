@@ -42,6 +42,8 @@ class HostConfigError(ValueError):
 
 
 def validate(config: HostConfig) -> None:
+    if not isinstance(config.bind, str):
+        raise HostConfigError(f"--bind must be an IP address such as 192.168.1.20, got {config.bind!r}")
     if config.bind in WILDCARDS:
         raise HostConfigError(
             f"--bind={config.bind!r} would listen on every interface; give the one address the workstation "
@@ -217,6 +219,7 @@ class Host:
             "last_step": self.gate.done,
             "capabilities": sorted(self.backend.capabilities),
             "limits": {"x_vel": self.config.max_x_vel, "theta_vel": self.config.max_theta_vel},
+            "publish_hz": self.config.publish_hz,
         }
 
     def close(self) -> None:

@@ -17,6 +17,8 @@ from lerobot_robot_locobot.protocol import ProtocolError, address, decode, decod
 
 # While waiting for a step to be acknowledged, the command is sent again this often (it may have been lost).
 RESEND_S = 0.05
+# An observation is fresh while it is younger than this many of the host's publishing periods.
+FRESH_PERIODS = 3
 
 
 class LocobotConnectionError(ConnectionError):
@@ -31,7 +33,7 @@ class LocobotHostError(RuntimeError):
 class Received:
     header: dict[str, Any]
     frames: dict[str, bytes]
-    at: float  # time.monotonic() when it arrived
+    at: float  # time.monotonic() when the host published it
 
     @property
     def seq(self) -> int:
@@ -49,6 +51,8 @@ class HostLink:
         self.latest: Received | None = None
         self._fresh_from = 0  # the next observation must have at least this seq (after a remote call)
         self._running: int | None = None
+        self._max_age = 0.1
+        self._clock_offset = float("inf")
         try:
             self._command = self._socket(zmq.PUSH, config.port_command, conflate=True)
             self._observation = self._socket(zmq.SUB, config.port_observation, conflate=True)
@@ -84,6 +88,7 @@ class HostLink:
         self.epoch, self.step_id = reply["epoch"], int(reply["last_step"])
         self.capabilities = frozenset(reply["capabilities"])
         self._fresh_from = int(reply["seq"])  # sequence numbers start afresh in each host process
+        self._max_age = FRESH_PERIODS / float(reply["publish_hz"])
 
     def call(self, op: str, timeout_s: float | None = None, **fields: Any) -> dict[str, Any]:
         """A remote call; its effects show in every observation from the reply's `seq` on."""
@@ -104,6 +109,7 @@ class HostLink:
 
     def step(self, command: str, amount: float) -> Received:
         """Run one discrete step and return the first observation taken after it finished."""
+        self.observation()  # a host that restarted since the last observation is met here, not mid-step
         self.step_id += 1
         step = self.step_id
         message = encode({"session": self.session, "kind": "step", "step": step, "command": command, "amount": amount})
@@ -127,8 +133,8 @@ class HostLink:
         self._send(encode({"session": self.session, "kind": "velocity", "x": x, "theta": theta}))
 
     def observation(self) -> Received:
-        """The newest observation, waiting up to the observation timeout for one at least as new as the
-        last remote call; fails rather than return an observation older than that."""
+        """The newest observation: one the host published within the last few publishing periods and after
+        the last remote call took effect, waiting up to the observation timeout for it."""
         self.poll(self.config.polling_timeout_ms)
         deadline = time.monotonic() + self.config.observation_timeout_s
         while self.latest is None or self.latest.seq < self._fresh_from or self._stale():
@@ -157,7 +163,7 @@ class HostLink:
                 self._host_restarted()
                 continue
             if self.latest is None or int(header["seq"]) > self.latest.seq:
-                self.latest = Received(header, frames, time.monotonic())
+                self.latest = Received(header, frames, time.monotonic() - self._age(float(header["time"])))
 
     def close(self) -> None:
         self.context.destroy(linger=0)
@@ -166,8 +172,15 @@ class HostLink:
         ack = None if self.latest is None else self.latest.header.get("ack")
         return ack is not None and ack.get("session") == self.session and int(ack.get("step", 0)) >= step
 
+    def _age(self, published: float) -> float:
+        """How long ago the host published at its wall-clock time `published`. The clocks of robot and
+        workstation need not agree: the smallest delay seen so far is taken as the offset plus transit time."""
+        delay = time.time() - published
+        self._clock_offset = min(self._clock_offset, delay)
+        return delay - self._clock_offset
+
     def _stale(self) -> bool:
-        return self.latest is not None and time.monotonic() - self.latest.at > self.config.observation_timeout_s
+        return self.latest is not None and time.monotonic() - self.latest.at > self._max_age
 
     def _send(self, message: bytes) -> None:
         with contextlib.suppress(zmq.Again):  # no connection yet: the resend loop or the next call tries again

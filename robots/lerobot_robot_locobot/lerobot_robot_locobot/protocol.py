@@ -102,7 +102,7 @@ def _jpeg(rgb: np.ndarray, quality: int) -> bytes:
 
 
 def _png_depth(depth: np.ndarray) -> bytes:
-    millimetres = np.clip(np.nan_to_num(depth, nan=0.0) * 1000.0, 0, 65535).astype(np.uint16)
+    millimetres = np.clip(np.rint(np.nan_to_num(depth, nan=0.0) * 1000.0), 0, 65535).astype(np.uint16)
     ok, data = cv2.imencode(".png", millimetres, [cv2.IMWRITE_PNG_COMPRESSION, 1])
     if not ok:
         raise ProtocolError("could not PNG-encode the depth image")
