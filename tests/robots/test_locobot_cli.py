@@ -22,7 +22,6 @@ def test_the_host_module_runs_and_refuses_to_listen_on_every_interface():
     ("args", "message"),
     [
         (["--bind=0.0.0.0"], "every interface"),
-        (["--bind=::"], "--bind must be an IP address"),
         (["--bind=10.255.255.1"], "cannot listen on tcp://10.255.255.1:5555"),
         (["--speed=3"], "unknown flag '--speed=3'"),
         (["--watchdog_s=30"], "--watchdog_s"),
