@@ -55,7 +55,9 @@ class ChaosProxy:
     """Sits between client and host on the command and observation channels; each message is dropped,
     sent twice, or held back and delivered after later ones, at random."""
 
-    def __init__(self, host_ports: dict[str, int], seed: int, drop: float = 0.3, repeat: float = 0.2, hold: float = 0.3):
+    def __init__(
+        self, host_ports: dict[str, int], seed: int, drop: float = 0.3, repeat: float = 0.2, hold: float = 0.3
+    ):
         self.rng = np.random.default_rng(seed)
         self.drop, self.repeat, self.hold = drop, repeat, hold
         self.context = zmq.Context()

@@ -169,7 +169,9 @@ def test_scenes_are_staged_and_read_back_in_simulation(connect):
         robot.stage_scene(scene)
         assert robot.read_scene() == scene
         observation = robot.get_observation()  # odometry reads in the scene frame from the staged pose
-        assert (observation["odom.x"], observation["odom.y"], observation["odom.theta"]) == pytest.approx((5.0, 1.0, math.pi / 2))
+        assert (observation["odom.x"], observation["odom.y"], observation["odom.theta"]) == pytest.approx(
+            (5.0, 1.0, math.pi / 2)
+        )
         robot.send_action(one_hot("forward"))
         assert robot.read_scene().robot.y == pytest.approx(1.25)
         with pytest.raises(Exception, match="collides with couch"):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -32,11 +33,15 @@ def test_geodesic_distances_are_exact_on_the_eight_connected_grid():
 
 
 def test_routes_go_around_furniture_and_keep_the_robot_clear_of_it():
-    wall = {"bookshelf": Pose(4.0, 2.6, math.pi / 2), "bookshelf_2": Pose(4.0, 3.6, math.pi / 2), "bed": Pose(4.0, 5.0, math.pi / 2)}
+    wall = {
+        "bookshelf": Pose(4.0, 2.6, math.pi / 2),
+        "bookshelf_2": Pose(4.0, 3.6, math.pi / 2),
+        "bed": Pose(4.0, 5.0, math.pi / 2),
+    }
     g = grid(wall)
     route = g.route(Pose(2.0, 3.0), [_point_region(g, (6.0, 3.0))])
     assert route is not None and route.length > 4.0 + 0.3
-    samples = np.concatenate([np.linspace(a, b, 50) for a, b in zip(route.points, route.points[1:])])
+    samples = np.concatenate([np.linspace(a, b, 50) for a, b in pairwise(route.points)])
     assert clearance(Room(), g.footprints, samples).min() >= 0.18 - 1e-9
 
 

@@ -42,7 +42,9 @@ def test_velocity_driving_integrates_turn_and_speed():
     for _ in range(10):
         apartment.drive(0.2, math.radians(90), 0.1)
     assert apartment.pose.yaw == pytest.approx(math.radians(90))
-    assert math.dist((apartment.pose.x, apartment.pose.y), (1.0, 3.0)) == pytest.approx(0.2 * 2 * math.sqrt(2) / math.pi, abs=0.02)
+    assert math.dist((apartment.pose.x, apartment.pose.y), (1.0, 3.0)) == pytest.approx(
+        0.2 * 2 * math.sqrt(2) / math.pi, abs=0.02
+    )
 
 
 def test_bad_scenes_are_refused_naming_the_problem():

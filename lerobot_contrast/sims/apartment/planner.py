@@ -193,7 +193,8 @@ def hausdorff(a: np.ndarray, b: np.ndarray, spacing: float = 0.05) -> float:
 
 
 def resample(points: np.ndarray, spacing: float) -> np.ndarray:
-    """Points along a polyline every `spacing` metres of arc length, both ends included."""
+    """Points along a polyline every `spacing` metres of arc length, with its vertices (so corners, where a
+    path comes closest to what it turns around, are kept)."""
     points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(points) < 2:
         return points
@@ -201,5 +202,5 @@ def resample(points: np.ndarray, spacing: float) -> np.ndarray:
     arc = np.concatenate([[0.0], np.cumsum(seg)])
     if arc[-1] == 0.0:
         return points[:1]
-    s = np.append(np.arange(0.0, arc[-1], spacing), arc[-1])
+    s = np.union1d(np.arange(0.0, arc[-1], spacing), arc)
     return np.stack([np.interp(s, arc, points[:, 0]), np.interp(s, arc, points[:, 1])], axis=-1)
