@@ -57,7 +57,6 @@ def client(ports: dict[str, int], directory: Path) -> Locobot:
             port_observation=ports["observation"],
             port_rpc=ports["rpc"],
             calibration_dir=directory,
-            polling_timeout_ms=1,
         )
     )
     robot.connect()

@@ -26,8 +26,6 @@ class LocobotConfig(RobotConfig):
     # get_observation waits this long for a fresh observation (published within the last three publishing
     # periods of the host), then fails: a stale image is never returned.
     observation_timeout_s: float = 2.0
-    # How long get_observation waits for a newer observation before returning the latest one received.
-    polling_timeout_ms: int = 15
     # Camera image size the host sends (it resizes or renders to it), and whether it adds aligned depth.
     camera_width: int = 640
     camera_height: int = 480

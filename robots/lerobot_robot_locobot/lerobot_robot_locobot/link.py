@@ -135,7 +135,7 @@ class HostLink:
     def observation(self) -> Received:
         """The newest observation: one the host published within the last few publishing periods and after
         the last remote call took effect, waiting up to the observation timeout for it."""
-        self.poll(self.config.polling_timeout_ms)
+        self.poll(0)  # take what has arrived; wait only when it is not fresh
         deadline = time.monotonic() + self.config.observation_timeout_s
         while self.latest is None or self.latest.seq < self._fresh_from or self._stale():
             if time.monotonic() > deadline:
