@@ -25,6 +25,7 @@ def test_the_host_module_runs_and_refuses_to_listen_on_every_interface():
         (["--bind=10.255.255.1"], "cannot listen on tcp://10.255.255.1:5555"),
         (["--speed=3"], "unknown flag '--speed=3'"),
         (["--watchdog_s=30"], "--watchdog_s"),
+        (["--sim.collision=bounce"], "--sim.collision must be slide or stop"),
         (["--backend=ros2"], "ROS 2"),
         (["--authorized_keys=/tmp"], "--server_secret_key"),
         (["--server_secret_key=/nonexistent/server.key_secret"], "no key file at /nonexistent"),

@@ -1,11 +1,18 @@
-"""`python -m lerobot_robot_locobot.host` settings (draccus flags such as --backend=sim --sim.collision=stop)."""
+"""`python -m lerobot_robot_locobot.host` settings (draccus flags such as --backend=sim --sim.collision=stop),
+their checks, and parsing with one-line errors."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import draccus
+
 from lerobot_robot_locobot.protocol import DEFAULT_PORTS
+
+BACKENDS = ("sim", "ros2")
+WILDCARDS = ("*", "0.0.0.0", "::", "")
 
 
 @dataclass
@@ -61,3 +68,50 @@ class HostConfig:
     authorized_keys: Path | None = None
     sim: SimConfig = field(default_factory=SimConfig)
     ros2: Ros2Config = field(default_factory=Ros2Config)
+
+
+class HostConfigError(ValueError):
+    pass
+
+
+def validate(config: HostConfig) -> None:
+    if config.bind in WILDCARDS:
+        raise HostConfigError(
+            f"--bind={config.bind!r} would listen on every interface; give the one address the workstation "
+            "reaches the robot at (or 127.0.0.1 for a local simulator)"
+        )
+    if config.backend not in BACKENDS:
+        raise HostConfigError(f"--backend must be one of {list(BACKENDS)}, got {config.backend!r}")
+    if not 0.05 <= config.watchdog_s <= 5.0:
+        raise HostConfigError(f"--watchdog_s must be between 0.05 and 5 seconds, got {config.watchdog_s}")
+    if config.publish_hz <= 0:
+        raise HostConfigError(f"--publish_hz must be positive, got {config.publish_hz}")
+    if config.sim.collision not in ("slide", "stop"):
+        raise HostConfigError(f"--sim.collision must be slide or stop, got {config.sim.collision!r}")
+    if config.ros2.base_type not in ("create3", "kobuki"):
+        raise HostConfigError(f"--ros2.base_type must be create3 or kobuki, got {config.ros2.base_type!r}")
+    if config.authorized_keys is not None and config.server_secret_key is None:
+        raise HostConfigError("--authorized_keys needs --server_secret_key (the host's own CurveZMQ key)")
+
+
+def _flag_names(cls: type, prefix: str = "") -> set[str]:
+    names = set()
+    for f in dataclasses.fields(cls):
+        names.add(prefix + f.name)
+        if f.default_factory is not dataclasses.MISSING and dataclasses.is_dataclass(f.default_factory):
+            names |= _flag_names(f.default_factory, f"{prefix}{f.name}.")
+    return names
+
+
+def parse_config(argv: list[str]) -> HostConfig:
+    """Draccus flags with a one-line error for an unknown flag or a bad value."""
+    known = _flag_names(HostConfig) | {"help", "config_path"}
+    for arg in argv:
+        if arg != "-h" and (not arg.startswith("--") or arg[2:].split("=", 1)[0] not in known):
+            raise HostConfigError(f"unknown flag {arg!r}; see --help for the flags the host takes")
+    try:
+        return draccus.parse(config_class=HostConfig, args=argv)
+    except SystemExit:
+        raise
+    except Exception as error:  # draccus explains bad values over several lines
+        raise HostConfigError(f"invalid flag value: {' '.join(str(error).split())}") from None

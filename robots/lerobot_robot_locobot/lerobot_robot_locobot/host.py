@@ -5,7 +5,6 @@ coming (watchdog), clamps what a client asks for, and publishes observations wit
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 import sys
@@ -17,8 +16,8 @@ from typing import Any
 import zmq
 
 from lerobot_robot_locobot.actions import COMMANDS, clamp
-from lerobot_robot_locobot.backends import BACKENDS, Backend, make_backend
-from lerobot_robot_locobot.config_host import HostConfig
+from lerobot_robot_locobot.backends import Backend, make_backend
+from lerobot_robot_locobot.config_host import HostConfig, HostConfigError, parse_config, validate
 from lerobot_robot_locobot.keys import KeyFileError, secure_server, start_authenticator
 from lerobot_robot_locobot.odometry import OdometryFrame
 from lerobot_robot_locobot.protocol import (
@@ -32,29 +31,8 @@ from lerobot_robot_locobot.protocol import (
 )
 
 log = logging.getLogger("lerobot_robot_locobot.host")
-WILDCARDS = ("*", "0.0.0.0", "::", "")
 # While the base moves, the loop runs at least this often, so closed-loop motions get fresh odometry.
 MOTION_PERIOD_S = 0.01
-
-
-class HostConfigError(ValueError):
-    pass
-
-
-def validate(config: HostConfig) -> None:
-    if config.bind in WILDCARDS:
-        raise HostConfigError(
-            f"--bind={config.bind!r} would listen on every interface; give the one address the workstation "
-            "reaches the robot at (or 127.0.0.1 for a local simulator)"
-        )
-    if config.backend not in BACKENDS:
-        raise HostConfigError(f"--backend must be one of {list(BACKENDS)}, got {config.backend!r}")
-    if not 0.05 <= config.watchdog_s <= 5.0:
-        raise HostConfigError(f"--watchdog_s must be between 0.05 and 5 seconds, got {config.watchdog_s}")
-    if config.publish_hz <= 0:
-        raise HostConfigError(f"--publish_hz must be positive, got {config.publish_hz}")
-    if config.authorized_keys is not None and config.server_secret_key is None:
-        raise HostConfigError("--authorized_keys needs --server_secret_key (the host's own CurveZMQ key)")
 
 
 class Host:
@@ -266,31 +244,6 @@ class HostThread:
     def __exit__(self, *exc: object) -> None:
         self.stop_event.set()
         self._thread.join(timeout=5.0)
-
-
-def _flag_names(cls: type, prefix: str = "") -> set[str]:
-    names = set()
-    for f in dataclasses.fields(cls):
-        names.add(prefix + f.name)
-        if f.default_factory is not dataclasses.MISSING and dataclasses.is_dataclass(f.default_factory):
-            names |= _flag_names(f.default_factory, f"{prefix}{f.name}.")
-    return names
-
-
-def parse_config(argv: list[str]) -> HostConfig:
-    """Draccus flags with a one-line error for an unknown flag or a bad value."""
-    import draccus
-
-    known = _flag_names(HostConfig) | {"help", "config_path"}
-    for arg in argv:
-        if arg != "-h" and (not arg.startswith("--") or arg[2:].split("=", 1)[0] not in known):
-            raise HostConfigError(f"unknown flag {arg!r}; see --help for the flags the host takes")
-    try:
-        return draccus.parse(config_class=HostConfig, args=argv)
-    except SystemExit:
-        raise
-    except Exception as error:  # draccus explains bad values over several lines
-        raise HostConfigError(f"invalid flag value: {' '.join(str(error).split())}") from None
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -8,9 +8,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from lerobot_robot_locobot.config_host import BACKENDS
 from lerobot_robot_locobot.odometry import Pose2
-
-BACKENDS = ("sim", "ros2")
 
 
 class Backend(Protocol):
