@@ -5,9 +5,10 @@ lerobot_contrast), so an evaluation stages instances and judges subgoals without
 
 from __future__ import annotations
 
+import logging
 import math
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from lerobot.robots import Robot
@@ -18,6 +19,10 @@ from lerobot_robot_locobot.config_locobot import LocobotConfig
 from lerobot_robot_locobot.link import HostLink, Received
 from lerobot_robot_locobot.protocol import decode_depth, decode_rgb
 
+if TYPE_CHECKING:
+    from lerobot_contrast.contrast.scene import Scene
+
+log = logging.getLogger(__name__)
 CAMERA = "front"
 DEPTH = "front_depth"
 
@@ -98,7 +103,9 @@ class Locobot(Robot):
         command = discrete_command(action)
         if command is not None:
             amount = self.config.forward_m if command == "forward" else math.radians(self.config.turn_deg)
-            link.step(command, 0.0 if command == "stop" else amount)
+            result = link.step(command, 0.0 if command == "stop" else amount).header["ack"]["result"]
+            if result != "done":  # the bumper stopped it, or the base did not get there in time
+                log.warning("LoCoBot %s step ended %s", command, result)
             self.stop_requested = command == "stop"
         return one_hot(command)
 
@@ -108,13 +115,13 @@ class Locobot(Robot):
         self._link.close()
         self._link = None
 
-    def read_scene(self):
+    def read_scene(self) -> Scene:
         """The furniture and the robot's pose as a lerobot_contrast Scene (sim backend only)."""
         from lerobot_contrast.contrast.scene import Scene
 
         return Scene.from_json(self._scene_call("read_scene")["scene"])
 
-    def stage_scene(self, scene) -> None:
+    def stage_scene(self, scene: Scene) -> None:
         """Place the furniture and the robot as in `scene`; odometry then reads in the scene's frame."""
         self._scene_call("stage_scene", scene=scene.to_json())
         self.stop_requested = False
