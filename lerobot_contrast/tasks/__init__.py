@@ -9,6 +9,7 @@ from lerobot_contrast.contrast.errors import UserError
 
 TASKS = {
     "language_table": ("lerobot_contrast.tasks.language_table", "LanguageTableTask"),
+    "vln": ("lerobot_contrast.tasks.vln", "VLNTask"),
 }
 
 
