@@ -14,15 +14,16 @@ from lerobot.robots import RobotConfig
 from lerobot_contrast.contrast.errors import UserError
 
 # The scripted baselines; any other --policy.type is a LeRobot policy type (act, diffusion, smolvla, ...).
-SCRIPTED_POLICIES = ("oracle", "random")
+SCRIPTED_POLICIES = ("oracle", "random", "route_follower")
 
 
 @dataclass
 class PolicyArgs:
     # A LeRobot policy to load: a directory written by save_pretrained, or a Hub repo id.
     path: str | None = None
-    # Without --policy.path: `oracle` (scripted push oracle with privileged state), `random`, or a LeRobot
-    # policy type built fresh with random weights from the robot's features (for smoke tests).
+    # Without --policy.path: `oracle` (scripted push oracle with privileged state), `random`, `route_follower`
+    # (scripted VLN navigator), or a LeRobot policy type built fresh with random weights from the robot's features
+    # (for smoke tests).
     type: str | None = None
     # Torch device for a LeRobot policy (cpu, cuda, mps); default: the policy config's own.
     device: str | None = None
@@ -36,7 +37,7 @@ class PolicyArgs:
 
     @property
     def kind(self) -> str:
-        """oracle | random | lerobot"""
+        """oracle | random | route_follower | lerobot"""
         if self.path is None and self.type in (None, *SCRIPTED_POLICIES):
             return self.type or "oracle"
         return "lerobot"
@@ -90,6 +91,19 @@ class EvalConfig:
     operator: str | None = None
     # Map robot observation keys to the policy's input features, e.g. {"observation.images.top": "observation.images.front"}.
     rename_map: dict[str, str] = field(default_factory=dict)
+    # Re-run a published or local evaluation's plan (its task, instances, perturbations, order and budget)
+    # against this policy: hub:USER/NAME or a run directory.
+    plan: str | None = None
+    # Record every episode to rerun/episode_NNNNNN.rrd in the run directory.
+    rerun: bool = True
+    # Record every episode into a LeRobotDataset v3 in the run directory (dataset/).
+    record_dataset: bool = False
+    # Publish the run directory to the Hugging Face Hub as a dataset repo when the run ends (needs --repo_id).
+    push_to_hub: bool = False
+    # The Hub dataset repo to publish to, USER/NAME.
+    repo_id: str | None = None
+    # Create the Hub repo private.
+    private: bool = False
     # Run directory (default: outputs/contrast/<date>/<time>_<task>_<strategy>).
     output_dir: Path | None = None
     # Continue the run in --output_dir where it stopped.

@@ -82,6 +82,12 @@ def reference_length(task: Task, instance: Instance) -> float | None:
     return None if hook is None else hook(instance)
 
 
+def path_metrics(task: Task, instance: Instance, path: list[Pose]) -> dict[str, float]:
+    """Task-specific metrics of the robot's path (e.g. nDTW for navigation), recorded with the trial."""
+    hook = getattr(task, "path_metrics", None)
+    return {} if hook is None else {k: v for k, v in hook(instance, path).items() if v is not None}
+
+
 def cost_model(task: Task, name: str) -> CostModel:
     """The `--cost` model: the task's own (a task file may declare handling times), else the default one."""
     hook = getattr(task, "cost_model", None)

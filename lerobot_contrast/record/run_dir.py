@@ -12,7 +12,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.record.journal import Journal
 
 # Settings that may differ between the original run and its resumption.
-RESUME_FREE_KEYS = ("resume", "dry_run", "output_dir", "operator")
+RESUME_FREE_KEYS = ("resume", "dry_run", "output_dir", "operator", "push_to_hub", "repo_id", "private")
 
 
 class RunDirError(UserError):

@@ -19,7 +19,7 @@ from lerobot.utils.robot_utils import precise_sleep
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.contrast.task import Judgement, judge, outcome_mode, reference_length, subgoals
+from lerobot_contrast.contrast.task import Judgement, judge, outcome_mode, path_metrics, reference_length, subgoals
 from lerobot_contrast.contrast.trial import Outcome
 from lerobot_contrast.operator_console import Label, OperatorConsole, SessionStopped, Staging
 from lerobot_contrast.policies import Policy
@@ -147,7 +147,8 @@ class RobotRunner:
         return key
 
     def _finished(self, context: TrialContext, path: list[Pose]) -> str | None:
-        if getattr(self.policy, "done", False):
+        # A policy (or a robot, for a discrete "stop" action) can end its own episode, as VLN agents do.
+        if getattr(self.policy, "done", False) or getattr(self.robot, "stop_requested", False):
             return "policy"
         predicate = self.scene_io and outcome_mode(self.task) == "predicate"
         if predicate and self.task.is_achieved(context.instance, self.robot.read_scene()):
@@ -248,7 +249,10 @@ class RobotRunner:
         return self._recorded(context, outcome)
 
     def _extra(self, context: TrialContext, staging: Staging, episode: Episode) -> dict[str, Any]:
-        extra: dict[str, Any] = {"ended_by": episode.ended_by}
+        extra: dict[str, Any] = {
+            "ended_by": episode.ended_by,
+            **path_metrics(self.task, context.instance, episode.path),
+        }
         if self.operator is not None:
             extra["reset_s"] = round(staging.reset_s, 3)
             if staging.moved is not None:

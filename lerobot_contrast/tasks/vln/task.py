@@ -92,6 +92,9 @@ class VLNTask:
         route = self.reference_route(instance)
         return None if route is None else route.length
 
+    def path_metrics(self, instance: Instance, path: list[Pose]) -> dict[str, float | None]:
+        return {"ndtw": self.ndtw(instance, path)}
+
     def ndtw(self, instance: Instance, path: list[Pose]) -> float | None:
         """nDTW of the robot's path against the reference route, normalised by the success radius."""
         route = self.reference_route(instance)

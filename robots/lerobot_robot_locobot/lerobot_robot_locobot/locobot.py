@@ -72,6 +72,12 @@ class Locobot(Robot):
     def supports_scene_io(self) -> bool:
         return "scene_io" in self.capabilities
 
+    @property
+    def simulated(self) -> bool:
+        """The host runs the simulated apartment (scene I/O is offered only there): no need to pace the loop,
+        since each discrete step returns once the host has executed it."""
+        return self.supports_scene_io
+
     def connect(self, calibrate: bool = True) -> None:
         if self._link is not None:
             raise DeviceAlreadyConnectedError(f"{self} is already connected")
