@@ -33,14 +33,22 @@ def needs_camera(cfg: EvalConfig) -> bool:
     return cfg.policy.kind == "lerobot" or cfg.rerun or cfg.record_dataset
 
 
-def make_robot(cfg: EvalConfig) -> Any:
-    from lerobot.robots import RobotConfig, make_robot_from_config
+def choose_robot(cfg: EvalConfig) -> None:
+    """Fill in the task's own robot when --robot is not given, so the run's config.json names it."""
+    from lerobot.robots import RobotConfig
 
-    if cfg.robot is None:
-        if cfg.task not in TASK_ROBOTS:
-            raise ConfigError(f"--task={cfg.task} has no simulator; name your robot with --robot.type=...")
-        robot_class = RobotConfig.get_choice_class(TASK_ROBOTS[cfg.task])
-        cfg.robot = robot_class(camera=needs_camera(cfg)) if cfg.task == "language_table" else robot_class()
+    if cfg.robot is not None:
+        return
+    if cfg.task not in TASK_ROBOTS:
+        raise ConfigError(f"--task={cfg.task} has no simulator; name your robot with --robot.type=...")
+    robot_class = RobotConfig.get_choice_class(TASK_ROBOTS[cfg.task])
+    cfg.robot = robot_class(camera=needs_camera(cfg)) if cfg.task == "language_table" else robot_class()
+
+
+def make_robot(cfg: EvalConfig) -> Any:
+    from lerobot.robots import make_robot_from_config
+
+    choose_robot(cfg)
     try:
         return make_robot_from_config(cfg.robot)
     except Exception as error:

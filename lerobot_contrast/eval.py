@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from lerobot_contrast.build import make_observers, make_robot, make_runner, register_robots
+from lerobot_contrast.build import choose_robot, make_observers, make_robot, make_runner, register_robots
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config
 from lerobot_contrast.console import plan_lines, trial_line
 from lerobot_contrast.contrast.errors import UserError
@@ -150,6 +150,7 @@ def evaluate(cfg: EvalConfig) -> int:
     if cfg.dry_run:
         dry_run(cfg, task, plan, cost_model)
         return 0
+    choose_robot(cfg)
     cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
     run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
     resume = f"--output_dir={run_dir.path} --resume=true"

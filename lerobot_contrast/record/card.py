@@ -40,11 +40,7 @@ def _get(data: dict[str, Any], dotted: str) -> Any:
 def _evaluated(config: dict[str, Any]) -> list[tuple[str, str]]:
     policy = _get(config, "policy.path") or _get(config, "policy.type") or "?"
     revision = _get(config, "policy.revision") or "-"
-    robot = _get(config, "robot.type")
-    if robot is None:
-        from lerobot_contrast.tasks import SIM_IDS
-
-        robot = f"simulator `{SIM_IDS.get(config.get('task', ''), '?')}`"
+    robot = f"`{_get(config, 'robot.type') or '?'}`"
     families = ", ".join(config.get("families") or []) or "all"
     settings = {k: v for k, v in (config.get("policy") or {}).items() if k not in ("type", "path", "revision")}
     return [

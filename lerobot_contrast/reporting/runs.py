@@ -13,6 +13,7 @@ import pandas as pd
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.record.hub import resolve_run
 from lerobot_contrast.record.journal import Journal
 from lerobot_contrast.record.results import read_results
 from lerobot_contrast.stats import frame
@@ -61,9 +62,9 @@ class Run:
 
 
 def load_run(spec: str) -> Run:
-    """Load a report input. `spec` is a local run directory (holding config.json and journal.jsonl or
-    results.parquet)."""
-    path = Path(spec)
+    """Load a report input: a local run directory (holding config.json and journal.jsonl or results.parquet),
+    or `hub:USER/NAME[@REVISION]`, a run published with `lerobot_contrast.publish` (downloaded first)."""
+    path = resolve_run(spec)
     if not path.is_dir():
         raise ReportInputError(f"{spec}: no such run directory; pass directories written by lerobot_contrast.eval")
     config_path = path / "config.json"

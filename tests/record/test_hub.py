@@ -11,37 +11,14 @@ import datasets
 import huggingface_hub
 import pyarrow.parquet as pq
 import pytest
-from huggingface_hub import HfFileSystem, constants
 from lerobot.datasets import LeRobotDataset
 
 from lerobot_contrast import publish
 from lerobot_contrast.record.hub import HubAuthError, HubError, download_run, publish_run, resolve_run, run_files
-from tests.fake_hub import FakeHub
 
 REPO = "tester/lt-contrast"
 # huggingface_hub passes raw bytes as `data=`, which httpx deprecates; not ours to fix.
 pytestmark = pytest.mark.filterwarnings("ignore:Use 'content=<...>' to upload raw bytes:DeprecationWarning")
-
-
-@pytest.fixture
-def hub(monkeypatch, tmp_path):
-    """A fresh fake Hub, with every client setting pointed at it; nothing can reach the internet."""
-    fake = FakeHub()
-    endpoint = fake.start()
-    monkeypatch.setenv("HF_TOKEN", fake.token)
-    monkeypatch.setenv("HF_ENDPOINT", endpoint)
-    monkeypatch.setenv("HF_HUB_DISABLE_XET", "1")
-    monkeypatch.setenv("HF_HOME", str(tmp_path / "hf_home"))
-    monkeypatch.setattr(constants, "ENDPOINT", endpoint)
-    monkeypatch.setattr(constants, "HUGGINGFACE_CO_URL_TEMPLATE", endpoint + "/{repo_id}/resolve/{revision}/{filename}")
-    monkeypatch.setattr(constants, "HF_HUB_DISABLE_XET", True)
-    monkeypatch.setattr(constants, "HF_HUB_CACHE", str(tmp_path / "hub_cache"))
-    monkeypatch.setattr(datasets.config, "HF_ENDPOINT", endpoint)
-    monkeypatch.setattr(datasets.config, "HUB_DATASETS_URL", endpoint + "/datasets/{repo_id}/resolve/{revision}/{path}")
-    HfFileSystem.clear_instance_cache()
-    yield fake
-    fake.stop()
-    HfFileSystem.clear_instance_cache()
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,28 @@
+"""Fixtures shared across the suite."""
+
+import datasets
+import pytest
+from huggingface_hub import HfFileSystem, constants
+
+from tests.fake_hub import FakeHub
+
+
+@pytest.fixture
+def hub(monkeypatch, tmp_path):
+    """A fresh fake Hub, with every client setting pointed at it; nothing can reach the internet."""
+    fake = FakeHub()
+    endpoint = fake.start()
+    monkeypatch.setenv("HF_TOKEN", fake.token)
+    monkeypatch.setenv("HF_ENDPOINT", endpoint)
+    monkeypatch.setenv("HF_HUB_DISABLE_XET", "1")
+    monkeypatch.setenv("HF_HOME", str(tmp_path / "hf_home"))
+    monkeypatch.setattr(constants, "ENDPOINT", endpoint)
+    monkeypatch.setattr(constants, "HUGGINGFACE_CO_URL_TEMPLATE", endpoint + "/{repo_id}/resolve/{revision}/{filename}")
+    monkeypatch.setattr(constants, "HF_HUB_DISABLE_XET", True)
+    monkeypatch.setattr(constants, "HF_HUB_CACHE", str(tmp_path / "hub_cache"))
+    monkeypatch.setattr(datasets.config, "HF_ENDPOINT", endpoint)
+    monkeypatch.setattr(datasets.config, "HUB_DATASETS_URL", endpoint + "/datasets/{repo_id}/resolve/{revision}/{path}")
+    HfFileSystem.clear_instance_cache()
+    yield fake
+    fake.stop()
+    HfFileSystem.clear_instance_cache()
