@@ -97,19 +97,20 @@ def context(index: int, instance: Any) -> TrialContext:
 def run_episode(env: gym.Env, task: Any, trial: TrialContext, observer: Any, steps: int, timings: Timings) -> None:
     """One paced episode: every step starts on its 10 Hz tick; only the loop thread's work is timed."""
     obs, _ = env.reset(seed=0, options={"instance": trial.instance})
-    policy = OraclePolicy(env, task, {trial.instance.id: trial.instance})
-    policy.reset(trial.instance, np.random.default_rng(0))
+    policy = OraclePolicy(env.unwrapped.scene, task, {trial.instance.id: trial.instance})
+    policy.reset(trial)
     start = time.perf_counter()
     observer.start(trial, FEATURES, POSE_KEYS)
     between = time.perf_counter() - start
     tick = time.perf_counter()
     for k in range(steps):
         start = time.perf_counter()
-        action = np.asarray(policy.act(obs), dtype=np.float32)
+        observation = robot_observation(obs)
+        action = policy.act(observation)
         before = time.perf_counter()
-        observer.step(k * PERIOD_S, robot_observation(obs), {"delta_x": float(action[0]), "delta_y": float(action[1])})
+        observer.step(k * PERIOD_S, observation, action)
         timings.observer_s.append(time.perf_counter() - before)
-        obs, *_ = env.step(action)
+        obs, *_ = env.step(np.array([action["delta_x"], action["delta_y"]], dtype=np.float32))
         busy = time.perf_counter() - start
         timings.busy_s.append(busy)
         timings.late += busy > PERIOD_S

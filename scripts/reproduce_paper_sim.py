@@ -92,6 +92,7 @@ def eval_flags(args: argparse.Namespace, design: str, seed: int, run_dir: Path) 
         f"--policy.noise_std={args.noise_std}",
         f"--policy.language_blind={args.language_blind}",
         f"--max_episode_steps={args.max_episode_steps}",
+        "--rerun=false",  # thousands of episodes: the study needs their numbers, not their recordings
         f"--output_dir={run_dir}",
     ]
     return [*flags, "--resume=true"] if (run_dir / "config.json").exists() else flags

@@ -87,17 +87,16 @@ class Episodes:
 
     def run(self, observer: Any, context: TrialContext, steps: int = 12) -> tuple[Outcome, EpisodeFiles]:
         obs, _ = self.env.reset(seed=0, options={"instance": context.instance})
-        policy = OraclePolicy(self.env, self.task, {context.base.id: context.base})
-        policy.reset(context.instance, context.rng)
+        policy = OraclePolicy(self.env.unwrapped.scene, self.task, {context.base.id: context.base})
+        policy.reset(context)
         observer.start(context, FEATURES, POSE_KEYS)
         start, path, success = time.perf_counter(), 0.0, False
         for step in range(steps):
-            action = np.asarray(policy.act(obs), dtype=np.float32)
-            observer.step(
-                step / 10.0, robot_observation(obs), {"delta_x": float(action[0]), "delta_y": float(action[1])}
-            )
+            observation = robot_observation(obs)
+            action = policy.act(observation)
+            observer.step(step / 10.0, observation, action)
             before = obs["effector_translation"]
-            obs, _, _, _, info = self.env.step(action)
+            obs, _, _, _, info = self.env.step(np.array([action["delta_x"], action["delta_y"]], dtype=np.float32))
             path += float(np.hypot(*(obs["effector_translation"] - before)))
             success = bool(info["is_success"])
         outcome = Outcome(
