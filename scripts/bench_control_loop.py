@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from lerobot_contrast.pretrained_policy import PretrainedPolicy, save_fresh_policy
-from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
+from lerobot_contrast.runners.episode import QuietObserver, TrialContext
 from lerobot_contrast.runners.robot import RobotRunner
 from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
 from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim
@@ -51,7 +51,7 @@ class Clock:
         return timed
 
 
-class StepTimes:
+class StepTimes(QuietObserver):
     """An episode observer that records when each step's action was sent."""
 
     def start(self, context, features, pose_keys):
@@ -59,15 +59,6 @@ class StepTimes:
 
     def step(self, timestamp_s, observation, action):
         self.times.append(time.perf_counter())
-
-    def end(self, outcome, cost):
-        return EpisodeFiles()
-
-    def discard(self):
-        pass
-
-    def close(self):
-        pass
 
 
 def episode(robot, policy, instance, fps: float | None, steps: int) -> tuple[float, list[float], float]:

@@ -35,20 +35,12 @@ from lerobot_contrast.policies import OraclePolicy  # noqa: E402
 from lerobot_contrast.record.dataset import DatasetRecorder  # noqa: E402
 from lerobot_contrast.record.rerun_log import RerunEpisodeRecorder  # noqa: E402
 from lerobot_contrast.runners.episode import TrialContext  # noqa: E402
+from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim, episode_features  # noqa: E402
 from lerobot_contrast.tasks.language_table import LanguageTableTask  # noqa: E402
 
 PERIOD_S = 0.1  # Language-Table's 10 Hz control
-FEATURES = {
-    "observation": {
-        "top": (180, 320, 3),
-        "effector.x": float,
-        "effector.y": float,
-        "effector_target.x": float,
-        "effector_target.y": float,
-    },
-    "action": {"delta_x": float, "delta_y": float},
-}
-POSE_KEYS = ("effector.x", "effector.y")
+FEATURES = episode_features()
+POSE_KEYS = LanguageTableSim.pose_keys
 
 
 @dataclass

@@ -8,7 +8,7 @@ import pytest
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.eval import main
 from lerobot_contrast.pretrained_policy import PolicyLoadError, PretrainedPolicy
-from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
+from lerobot_contrast.runners.episode import QuietObserver, TrialContext
 from lerobot_contrast.runners.robot import RobotRunner
 from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
 from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim
@@ -42,7 +42,7 @@ def test_a_saved_lerobot_policy_runs_a_contrast_evaluation_in_the_simulator(act_
     assert summary["settings"]["policy"] == str(act_path) and summary["settings"]["robot"] == "language_table_sim"
 
 
-class ActionLog:
+class ActionLog(QuietObserver):
     """An episode observer that keeps the actions sent."""
 
     def start(self, context, features, pose_keys):
@@ -50,15 +50,6 @@ class ActionLog:
 
     def step(self, timestamp_s, observation, action):
         self.actions.append(action)
-
-    def end(self, outcome, cost):
-        return EpisodeFiles()
-
-    def discard(self):
-        pass
-
-    def close(self):
-        pass
 
 
 def replay(act_path, instance: Instance, index: int):

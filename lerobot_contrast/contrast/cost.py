@@ -6,7 +6,8 @@ strategy and can be automated). Language perturbations leave the scene alone and
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Protocol
 
 from lerobot_contrast.contrast.errors import UserError
@@ -68,12 +69,14 @@ class ResetTimeCost:
     per_object_s: float = 3.0
     hand_speed_m_s: float = 0.25
     tolerance: float = 0.005
+    # Handling times of particular objects (seconds), where they differ from `per_object_s`.
+    handling_s: Mapping[str, float] = field(default_factory=dict)
     name: str = "reset_time"
     unit: str = "s"
 
     def __call__(self, current: Scene, target: Scene) -> float:
         moves = moved_objects(current, target, self.tolerance)
-        return sum(self.per_object_s + d / self.hand_speed_m_s for d in moves.values())
+        return sum(self.handling_s.get(n, self.per_object_s) + d / self.hand_speed_m_s for n, d in moves.items())
 
 
 COST_MODELS = {"distance": DistanceCost, "reset_time": ResetTimeCost}

@@ -81,3 +81,22 @@ class EpisodeObserver(Protocol):
     def close(self) -> None:
         """Finish the session's files (e.g. finalize a dataset); called once, also after an interruption."""
         ...
+
+
+class QuietObserver:
+    """An observer that does nothing: subclass it to watch only what you need (timings, actions)."""
+
+    def start(self, context: TrialContext, features: dict[str, dict], pose_keys: tuple[str, str] | None) -> None:
+        pass
+
+    def step(self, timestamp_s: float, observation: dict[str, Any], action: dict[str, Any]) -> None:
+        pass
+
+    def end(self, outcome: Outcome, cost: float) -> EpisodeFiles:
+        return EpisodeFiles()
+
+    def discard(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass

@@ -18,19 +18,11 @@ from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import write_json_atomic
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
+from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim, episode_features
 from lerobot_contrast.tasks.language_table import LanguageTableTask
 
-FEATURES = {
-    "observation": {
-        "top": (180, 320, 3),
-        "effector.x": float,
-        "effector.y": float,
-        "effector_target.x": float,
-        "effector_target.y": float,
-    },
-    "action": {"delta_x": float, "delta_y": float},
-}
-POSE_KEYS = ("effector.x", "effector.y")
+FEATURES = episode_features()
+POSE_KEYS = LanguageTableSim.pose_keys
 SETTINGS = {"task": "language_table", "strategy": "contrast", "policy": "oracle", "cost_unit": "m"}
 
 

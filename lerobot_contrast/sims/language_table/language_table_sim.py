@@ -23,6 +23,14 @@ STATE = ("effector.x", "effector.y", "effector_target.x", "effector_target.y")
 ACTION = ("delta_x", "delta_y")
 
 
+def episode_features(camera: bool = True) -> dict[str, dict[str, Any]]:
+    """The robot's observation and action features, as episode observers receive them."""
+    observation: dict[str, Any] = dict.fromkeys(STATE, float)
+    if camera:
+        observation[CAMERA] = (board.IMAGE_HEIGHT, board.IMAGE_WIDTH, 3)
+    return {"observation": observation, "action": dict.fromkeys(ACTION, float)}
+
+
 class LanguageTableSim(Robot):
     config_class = LanguageTableSimConfig
     name = "language_table_sim"
@@ -40,14 +48,11 @@ class LanguageTableSim(Robot):
 
     @property
     def observation_features(self) -> dict[str, Any]:
-        features: dict[str, Any] = dict.fromkeys(STATE, float)
-        if self.config.camera:
-            features[CAMERA] = (board.IMAGE_HEIGHT, board.IMAGE_WIDTH, 3)
-        return features
+        return episode_features(self.config.camera)["observation"]
 
     @property
     def action_features(self) -> dict[str, type]:
-        return dict.fromkeys(ACTION, float)
+        return episode_features()["action"]
 
     @property
     def is_connected(self) -> bool:

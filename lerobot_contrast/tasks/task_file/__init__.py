@@ -1,7 +1,6 @@
 """Tasks declared in a YAML task file (format version 1): workspace, objects, instructions, outcome,
 perturbations and cost, validated on load with errors that name the file, line and key."""
 
-from lerobot_contrast.tasks.task_file.cost import HandlingTimeCost
 from lerobot_contrast.tasks.task_file.loader import (
     example_names,
     examples_dir,
@@ -18,7 +17,6 @@ __all__ = [
     "GENERIC",
     "VERSION",
     "FileTask",
-    "HandlingTimeCost",
     "TaskFileError",
     "TaskSpec",
     "example_names",
