@@ -72,20 +72,17 @@ def error_figure(
         ax.plot(c.costs[upto], c.mean[upto], color=colors[v.label], label=f"{v.label} ({seeds})")
         low, high = (c.mean - c.std)[upto], (c.mean + c.std)[upto]
         ax.fill_between(c.costs[upto], low, high, color=colors[v.label], alpha=0.15, linewidth=0)
-    reference = float(np.mean([v.reference_costs.mean() for v in versus]))
-    ax.axvline(
-        reference,
-        color="black",
-        linestyle=":",
-        linewidth=1,
-        label=f"standard evaluation's cost ({reference:.0f} {unit})",
-    )
+    _mark_standard_cost(ax, float(np.mean([v.reference_costs.mean() for v in versus])), unit)
     ax.set_xlim(0.0, cap if cap is not None else max(v.curve.costs[-1] for v in versus))
     ax.set_ylim(bottom=0.0)
     ax.set_xlabel(f"cumulative cost ({unit} of staging)")
     ax.set_ylabel(f"|estimated − full i.i.d. {METRIC_NAMES[metric]}|")
     ax.set_title(f"Estimation error of {METRIC_NAMES[metric]} vs cost (mean ± std over seeds)")
     return _save(fig, path)
+
+
+def _mark_standard_cost(ax, cost: float, unit: str) -> None:
+    ax.axvline(cost, color="black", linestyle=":", linewidth=1, label=f"standard evaluation's cost ({cost:.0f} {unit})")
 
 
 def _until(costs: np.ndarray, end: float) -> np.ndarray:
@@ -113,13 +110,7 @@ def trials_figure(
             low, high = counts.min(axis=0)[upto], counts.max(axis=0)[upto]
             ax.fill_between(costs[upto], low, high, color=colors[label], alpha=0.15, linewidth=0)
     if reference is not None:
-        ax.axvline(
-            reference,
-            color="black",
-            linestyle=":",
-            linewidth=1,
-            label=f"standard evaluation's cost ({reference:.0f} {unit})",
-        )
+        _mark_standard_cost(ax, reference, unit)
     ax.set_xlim(0.0, costs[-1])
     ax.set_ylim(bottom=0.0)
     ax.set_xlabel(f"cumulative cost ({unit} of staging)")
