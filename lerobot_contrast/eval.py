@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from lerobot_contrast.build import choose_robot, make_observers, make_robot, make_runner, register_robots
+from lerobot_contrast.build import make_observers, make_robot, make_runner, register_robots
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config
 from lerobot_contrast.console import plan_lines, trial_line
 from lerobot_contrast.contrast.errors import UserError
@@ -26,8 +26,11 @@ from lerobot_contrast.runners.robot import RobotLostError
 from lerobot_contrast.tasks import make_task
 
 
+DEFAULT_INSTANCES = 50
+
+
 def validate(cfg: EvalConfig) -> None:
-    if cfg.n_instances < 1:
+    if cfg.n_instances is not None and cfg.n_instances < 1:
         raise ConfigError(f"--n_instances must be at least 1, got {cfg.n_instances}")
     if cfg.max_episode_steps < 1:
         raise ConfigError(f"--max_episode_steps must be at least 1, got {cfg.max_episode_steps}")
@@ -44,7 +47,7 @@ def build_plan(cfg: EvalConfig) -> tuple[Any, list[PlannedTrial]]:
     task = make_task(cfg.task, families=cfg.families)
     perturbations = task.perturbations.select(cfg.perturbations) if cfg.strategy == "contrast" else []
     rng = np.random.default_rng(cfg.seed)
-    instances = task.sample(cfg.n_instances, rng)
+    instances = task.sample(cfg.n_instances or getattr(task, "default_instances", DEFAULT_INSTANCES), rng)
     return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order)
 
 
@@ -80,17 +83,7 @@ def adopt_plan(cfg: EvalConfig) -> Path:
     return source
 
 
-def run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir) -> dict[str, Any]:
-    robot = make_robot(cfg)
-    connect(robot)  # first: a remote robot says on connecting whether it can stage scenes
-    try:
-        return run_connected(cfg, task, plan, cost_model, run_dir, robot)
-    finally:
-        if robot.is_connected:
-            robot.disconnect()
-
-
-def run_connected(
+def run(
     cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any
 ) -> dict[str, Any]:
     observers = make_observers(cfg, task, robot, run_dir.path)
@@ -150,12 +143,25 @@ def evaluate(cfg: EvalConfig) -> int:
     if cfg.dry_run:
         dry_run(cfg, task, plan, cost_model)
         return 0
-    choose_robot(cfg)
-    cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
-    run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
+    robot = make_robot(cfg)
+    # Connect before creating the run directory: an unreachable robot leaves nothing behind to resume.
+    # A remote robot also says on connecting whether it can stage scenes.
+    connect(robot)
+    try:
+        cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
+        run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
+        return run_and_report(cfg, task, plan, cost_model, run_dir, robot)
+    finally:
+        if robot.is_connected:
+            robot.disconnect()
+
+
+def run_and_report(
+    cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any
+) -> int:
     resume = f"--output_dir={run_dir.path} --resume=true"
     try:
-        summary = run(cfg, task, plan, cost_model, run_dir)
+        summary = run(cfg, task, plan, cost_model, run_dir, robot)
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: every finished trial is in {run_dir.journal.path}; continue with {resume}", file=sys.stderr

@@ -68,3 +68,15 @@ def test_the_shipped_contrast_evaluation_runs_its_75_trials(host, tmp_path):
     assert main(eval_flags(host, tmp_path, "--n_instances=5", "--repeats=3", "--rerun=false")) == 0
     records = journal(tmp_path)
     assert len(records) == 75 and all(r["status"] == "done" and r["success"] for r in records)
+
+
+def test_an_unreachable_robot_is_one_line_and_leaves_no_run_directory(tmp_path, capsys):
+    from tests.robots.locobot_helpers import free_port
+
+    port = free_port()
+    flags = ["--task=vln", "--robot.type=locobot", f"--robot.port_rpc={port}", f"--robot.port_command={port}",
+             "--robot.connect_timeout_s=0.5", "--policy.type=route_follower", f"--output_dir={tmp_path / 'run'}"]  # fmt: skip
+    assert main(flags) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1 and "127.0.0.1" in err
+    assert not (tmp_path / "run").exists()

@@ -88,6 +88,13 @@ class FileTask:
         instruction, new_goal = goals.compose(self.template_of(instance), text or goal["text"], new_slots, new_words)
         return instance.derive(instruction=instruction, goal=new_goal)
 
+    @property
+    def default_instances(self) -> int:
+        """Without --n_instances: every listed instance, or 50 sampled ones."""
+        if self.spec.instances is None:
+            return 50
+        return sum(item.template.family in self.families for item in self.spec.instances)
+
     # --- the Task protocol ---
 
     def sample(self, n: int, rng: np.random.Generator) -> list[Instance]:

@@ -29,6 +29,7 @@ class VLNTask:
 
     name = "vln"
     outcome = "subgoals"
+    default_instances = 5  # one per shipped furniture arrangement, as in the paper
 
     def __init__(self, families: Sequence[str] | None = None, radius: float = SUCCESS_RADIUS_M) -> None:
         unknown = [f for f in families or () if f != FAMILY]
