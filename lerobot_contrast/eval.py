@@ -25,7 +25,6 @@ from lerobot_contrast.record.summary import format_summary, summarize
 from lerobot_contrast.runners.robot import RobotLostError
 from lerobot_contrast.tasks import make_task
 
-
 DEFAULT_INSTANCES = 50
 
 
