@@ -96,7 +96,7 @@ def time_evaluation(n_instances: int, seed: int) -> Timing:
     """The whole `lerobot_contrast.eval` loop (contrast strategy, oracle, SPL references, journal) per episode."""
     with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()):
         start = time.perf_counter()
-        eval_main([f"--n_instances={n_instances}", f"--seed={seed}", f"--output_dir={tmp}/run"])
+        eval_main([f"--n_instances={n_instances}", f"--seed={seed}", "--rerun=false", f"--output_dir={tmp}/run"])
         seconds = time.perf_counter() - start
         overall = json.loads((Path(tmp) / "run" / "summary.json").read_text())["overall"]
     return Timing("evaluation", overall["trials"], overall["trials"], seconds)
