@@ -115,9 +115,8 @@ def make_observers(cfg: EvalConfig, task: Any, robot: Any, run_dir: Path) -> lis
 
 
 def make_runner(
-    cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial], unit: str, observers: list[EpisodeObserver]
+    cfg: EvalConfig, robot: Any, task: Any, policy: Any, unit: str, observers: list[EpisodeObserver]
 ) -> RobotRunner:
-    policy = make_policy(cfg, robot, task, plan)
     scene_io = reports_scene(robot, task.storage_scene().objects)
     mode = cfg.operator or ("auto" if scene_io else "console")
     if mode not in OPERATORS:

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from lerobot_contrast.build import make_observers, make_robot, make_runner, register_robots
+from lerobot_contrast.build import make_observers, make_policy, make_robot, make_runner, register_robots
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config
 from lerobot_contrast.console import plan_lines, trial_line
 from lerobot_contrast.contrast.errors import UserError
@@ -83,10 +83,10 @@ def adopt_plan(cfg: EvalConfig) -> Path:
 
 
 def run(
-    cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any
+    cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any, policy: Any
 ) -> dict[str, Any]:
     observers = make_observers(cfg, task, robot, run_dir.path)
-    execute = make_runner(cfg, robot, task, plan, cost_model.unit, observers)
+    execute = make_runner(cfg, robot, task, policy, cost_model.unit, observers)
     write_plan(run_dir.path, plan)
     records = run_dir.journal.records
     state = LoopState.resume(records, task.storage_scene())
@@ -147,20 +147,21 @@ def evaluate(cfg: EvalConfig) -> int:
     # A remote robot also says on connecting whether it can stage scenes.
     connect(robot)
     try:
+        policy = make_policy(cfg, robot, task, plan)  # a policy that cannot load leaves no run directory either
         cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
         run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
-        return run_and_report(cfg, task, plan, cost_model, run_dir, robot)
+        return run_and_report(cfg, task, plan, cost_model, run_dir, robot, policy)
     finally:
         if robot.is_connected:
             robot.disconnect()
 
 
 def run_and_report(
-    cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any
+    cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any, policy: Any
 ) -> int:
     resume = f"--output_dir={run_dir.path} --resume=true"
     try:
-        summary = run(cfg, task, plan, cost_model, run_dir, robot)
+        summary = run(cfg, task, plan, cost_model, run_dir, robot, policy)
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: every finished trial is in {run_dir.journal.path}; continue with {resume}", file=sys.stderr

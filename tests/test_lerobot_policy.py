@@ -135,6 +135,7 @@ def test_rename_map_feeds_robot_keys_to_the_policys_features(tmp_path, capsys):
     assert main([*base, f"--output_dir={tmp_path / 'a'}"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "observation.images.front" in err and "--rename_map" in err
+    assert not (tmp_path / "a").exists()
     rename = '--rename_map={"observation.images.top": "observation.images.front"}'
     assert main([*base, rename, f"--output_dir={tmp_path / 'b'}"]) == 0
 
