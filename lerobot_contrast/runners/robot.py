@@ -127,7 +127,7 @@ class RobotRunner:
                 steps += 1
                 observation = self.robot.get_observation()
                 self._extend(path, observation)
-                ended_by = self._finished(context, path)
+                ended_by = self._finished(context)
                 if ended_by is not None:
                     break
                 precise_sleep(self.period - (time.perf_counter() - tick))
@@ -146,7 +146,7 @@ class RobotRunner:
             self._hold(observation)
         return key
 
-    def _finished(self, context: TrialContext, path: list[Pose]) -> str | None:
+    def _finished(self, context: TrialContext) -> str | None:
         # A policy (or a robot, for a discrete "stop" action) can end its own episode, as VLN agents do.
         if getattr(self.policy, "done", False) or getattr(self.robot, "stop_requested", False):
             return "policy"
@@ -205,7 +205,7 @@ class RobotRunner:
         early = episode.ended_by if episode.ended_by in ("success", "failure") else None
         return self.operator.label(subgoals(self.task, instance), judgement, early)
 
-    def _cost(self, context: TrialContext, staging: Staging) -> float | None:
+    def _cost(self, staging: Staging) -> float | None:
         if self.operator is None:
             return None
         if self.cost_unit == "s":
@@ -223,7 +223,7 @@ class RobotRunner:
             duration_s=episode.duration_s,
             progress=label.progress,
             reference_length=reference_length(self.task, context.instance),
-            cost=self._cost(context, staging),
+            cost=self._cost(staging),
             extra=self._extra(context, staging, episode),
         )
         return self._recorded(context, outcome)
@@ -240,7 +240,7 @@ class RobotRunner:
             scene_after=scene_after,
             duration_s=episode.duration_s,
             status="aborted",
-            cost=self._cost(context, staging),
+            cost=self._cost(staging),
             extra=self._extra(context, staging, episode),
         )
         asked = self.operator is not None and self._halt is None and episode.ended_by == "estop"
