@@ -26,15 +26,14 @@ from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
-import gymnasium as gym  # noqa: E402
 import numpy as np  # noqa: E402
 
-import lerobot_contrast.sims  # noqa: E402, F401  (registers the simulator)
 from lerobot_contrast.contrast.trial import Outcome  # noqa: E402
 from lerobot_contrast.policies import OraclePolicy  # noqa: E402
 from lerobot_contrast.record.dataset import DatasetRecorder  # noqa: E402
 from lerobot_contrast.record.rerun_log import RerunEpisodeRecorder  # noqa: E402
-from lerobot_contrast.runners.episode import TrialContext  # noqa: E402
+from lerobot_contrast.runners.episode import QuietObserver, TrialContext  # noqa: E402
+from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig  # noqa: E402
 from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim, episode_features  # noqa: E402
 from lerobot_contrast.tasks.language_table import LanguageTableTask  # noqa: E402
 
@@ -55,23 +54,6 @@ class Timings:
         return 1000 * float(np.mean(self.busy_s))
 
 
-class Bare:
-    """No observer: the loop's own cost."""
-
-    def start(self, *args: Any) -> None: ...
-
-    def step(self, *args: Any) -> None: ...
-
-    def end(self, *args: Any) -> None: ...
-
-    def close(self) -> None: ...
-
-
-def robot_observation(obs: dict[str, np.ndarray]) -> dict[str, Any]:
-    (ex, ey), (tx, ty) = obs["effector_translation"], obs["effector_target_translation"]
-    return {"top": obs["rgb"], "effector.x": ex, "effector.y": ey, "effector_target.x": tx, "effector_target.y": ty}
-
-
 def context(index: int, instance: Any) -> TrialContext:
     return TrialContext(
         index=index,
@@ -86,10 +68,12 @@ def context(index: int, instance: Any) -> TrialContext:
     )
 
 
-def run_episode(env: gym.Env, task: Any, trial: TrialContext, observer: Any, steps: int, timings: Timings) -> None:
+def run_episode(
+    robot: LanguageTableSim, task: Any, trial: TrialContext, observer: Any, steps: int, timings: Timings
+) -> None:
     """One paced episode: every step starts on its 10 Hz tick; only the loop thread's work is timed."""
-    obs, _ = env.reset(seed=0, options={"instance": trial.instance})
-    policy = OraclePolicy(env.unwrapped.scene, task, {trial.instance.id: trial.instance})
+    robot.stage_scene(trial.instance.scene)
+    policy = OraclePolicy(robot.read_scene, task, {trial.instance.id: trial.instance})
     policy.reset(trial)
     start = time.perf_counter()
     observer.start(trial, FEATURES, POSE_KEYS)
@@ -97,18 +81,17 @@ def run_episode(env: gym.Env, task: Any, trial: TrialContext, observer: Any, ste
     tick = time.perf_counter()
     for k in range(steps):
         start = time.perf_counter()
-        observation = robot_observation(obs)
-        action = policy.act(observation)
+        observation = robot.get_observation()
+        action = robot.send_action(policy.act(observation))
         before = time.perf_counter()
         observer.step(k * PERIOD_S, observation, action)
         timings.observer_s.append(time.perf_counter() - before)
-        obs, *_ = env.step(np.array([action["delta_x"], action["delta_y"]], dtype=np.float32))
         busy = time.perf_counter() - start
         timings.busy_s.append(busy)
         timings.late += busy > PERIOD_S
         tick += PERIOD_S
         time.sleep(max(0.0, tick - time.perf_counter()))
-    outcome = Outcome(success=False, steps=steps, path_length=0.0, scene_after=env.unwrapped.scene(), duration_s=0.0)
+    outcome = Outcome(success=False, steps=steps, path_length=0.0, scene_after=robot.read_scene(), duration_s=0.0)
     start = time.perf_counter()
     observer.end(outcome, 0.0)
     timings.start_end_s.append(between + time.perf_counter() - start)
@@ -136,19 +119,20 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     task = LanguageTableTask(families=("block2block",))
     instances = task.sample(args.episodes + 1, np.random.default_rng(args.seed))
-    env = gym.make("lerobot_contrast/LanguageTable-v0", obs_type="rgb")
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    robot.connect()
     with tempfile.TemporaryDirectory() as tmp:
         variants = {
-            "bare": Bare(),
+            "bare": QuietObserver(),
             "rerun": RerunEpisodeRecorder(Path(tmp) / "rerun_run", task=task),
             "dataset": DatasetRecorder(Path(tmp) / "dataset_run", fps=int(1 / PERIOD_S)),
         }
         timings = {name: Timings(name) for name in variants}
         for name, observer in variants.items():  # warm-up: imports, encoders, first files
-            run_episode(env, task, context(0, instances[0]), observer, 5, Timings(name))
+            run_episode(robot, task, context(0, instances[0]), observer, 5, Timings(name))
         for episode, instance in enumerate(instances[1:], start=1):
             for name, observer in variants.items():
-                run_episode(env, task, context(episode, instance), observer, args.steps, timings[name])
+                run_episode(robot, task, context(episode, instance), observer, args.steps, timings[name])
         for observer in variants.values():
             observer.close()
     bare, rerun, dataset = timings["bare"], timings["rerun"], timings["dataset"]

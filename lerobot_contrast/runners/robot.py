@@ -71,6 +71,8 @@ class RobotRunner:
         self.cost_unit = cost_unit
         self.reconnect_attempts, self.reconnect_wait_s = reconnect_attempts, reconnect_wait_s
         self.pose_keys: tuple[str, str] | None = getattr(robot, "pose_keys", None)
+        # Episodes end once the scene shows the goal, as the benchmark's do, where the scene can be read.
+        self.stop_on_goal = self.scene_io and outcome_mode(task) == "predicate"
         # Why the session cannot go on (robot lost, operator stopped after an abort), raised at the next trial
         # so that the trial that ended this way is journalled first.
         self._halt: Exception | None = None
@@ -150,8 +152,7 @@ class RobotRunner:
         # A policy (or a robot, for a discrete "stop" action) can end its own episode, as VLN agents do.
         if getattr(self.policy, "done", False) or getattr(self.robot, "stop_requested", False):
             return "policy"
-        predicate = self.scene_io and outcome_mode(self.task) == "predicate"
-        if predicate and self.task.is_achieved(context.instance, self.robot.read_scene()):
+        if self.stop_on_goal and self.task.is_achieved(context.instance, self.robot.read_scene()):
             return "predicate"
         return None
 

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 
-import lerobot_contrast.sims  # noqa: F401  (registers the simulator)
 from lerobot_contrast.contrast.perturbation import perturb
 from lerobot_contrast.contrast.trial import Outcome, TrialRecord
 from lerobot_contrast.policies import OraclePolicy
@@ -18,24 +17,13 @@ from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import write_json_atomic
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
+from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
 from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim, episode_features
 from lerobot_contrast.tasks.language_table import LanguageTableTask
 
 FEATURES = episode_features()
 POSE_KEYS = LanguageTableSim.pose_keys
 SETTINGS = {"task": "language_table", "strategy": "contrast", "policy": "oracle", "cost_unit": "m"}
-
-
-def robot_observation(obs: dict[str, np.ndarray]) -> dict[str, Any]:
-    """The simulator's observation under the Language-Table robot's feature names."""
-    (ex, ey), (tx, ty) = obs["effector_translation"], obs["effector_target_translation"]
-    return {
-        "top": obs["rgb"],
-        "effector.x": float(ex),
-        "effector.y": float(ey),
-        "effector_target.x": float(tx),
-        "effector_target.y": float(ty),
-    }
 
 
 def contexts(perturbations: tuple[str, ...] = ("LB1", "SB1"), n_bases: int = 1, seed: int = 3) -> list[TrialContext]:
@@ -71,31 +59,36 @@ def contexts(perturbations: tuple[str, ...] = ("LB1", "SB1"), n_bases: int = 1, 
 
 
 class Episodes:
-    """Drives observers through oracle-controlled episodes of the simulator."""
+    """Drives observers through oracle-controlled episodes of the simulated Language-Table robot."""
 
     def __init__(self) -> None:
-        self.env = gym.make("lerobot_contrast/LanguageTable-v0", obs_type="rgb")
+        self.robot = LanguageTableSim(LanguageTableSimConfig())
+        self.robot.connect()
         self.task = LanguageTableTask(families=("block2block",))
 
+    def stage(self, context: TrialContext) -> dict[str, Any]:
+        """Stage the trial's scene; the robot's first observation of it."""
+        self.robot.stage_scene(context.instance.scene)
+        return self.robot.get_observation()
+
     def run(self, observer: Any, context: TrialContext, steps: int = 12) -> tuple[Outcome, EpisodeFiles]:
-        obs, _ = self.env.reset(seed=0, options={"instance": context.instance})
-        policy = OraclePolicy(self.env.unwrapped.scene, self.task, {context.base.id: context.base})
+        observation = self.stage(context)
+        policy = OraclePolicy(self.robot.read_scene, self.task, {context.base.id: context.base})
         policy.reset(context)
         observer.start(context, FEATURES, POSE_KEYS)
-        start, path, success = time.perf_counter(), 0.0, False
+        start, path = time.perf_counter(), 0.0
         for step in range(steps):
-            observation = robot_observation(obs)
-            action = policy.act(observation)
+            action = self.robot.send_action(policy.act(observation))
             observer.step(step / 10.0, observation, action)
-            before = obs["effector_translation"]
-            obs, _, _, _, info = self.env.step(np.array([action["delta_x"], action["delta_y"]], dtype=np.float32))
-            path += float(np.hypot(*(obs["effector_translation"] - before)))
-            success = bool(info["is_success"])
+            before = (observation["effector.x"], observation["effector.y"])
+            observation = self.robot.get_observation()
+            path += math.dist(before, (observation["effector.x"], observation["effector.y"]))
+        scene_after = self.robot.read_scene()
         outcome = Outcome(
-            success=success,
+            success=self.task.is_achieved(context.instance, scene_after),
             steps=steps,
             path_length=path,
-            scene_after=self.env.unwrapped.scene(),
+            scene_after=scene_after,
             duration_s=time.perf_counter() - start,
             reference_length=0.3,
         )

@@ -6,14 +6,13 @@ import shutil
 import subprocess
 import sys
 
-import numpy as np
 import pytest
 from lerobot.datasets import LeRobotDataset
 
 from lerobot_contrast.contrast.trial import Outcome
 from lerobot_contrast.record.dataset import DatasetError, DatasetRecorder
 from tests.record.conftest import STEPS, read_rrd
-from tests.record.lt_episodes import FEATURES, POSE_KEYS, Episodes, contexts, robot_observation
+from tests.record.lt_episodes import FEATURES, POSE_KEYS, Episodes, contexts
 
 REPO_ID = "local/run"
 
@@ -68,16 +67,17 @@ def test_the_sidecar_maps_episodes_to_trials_costs_and_metrics(recorded_run):
 
 
 def episode(recorder, episodes, context, steps=4, discard_after=None):
-    obs, _ = episodes.env.reset(seed=0, options={"instance": context.instance})
+    observation = episodes.stage(context)
     recorder.start(context, FEATURES, POSE_KEYS)
     for k in range(steps):
-        recorder.step(k / 10, robot_observation(obs), {"delta_x": 0.01, "delta_y": 0.0})
-        obs, *_ = episodes.env.step(np.array([0.01, 0.0], dtype=np.float32))
+        action = episodes.robot.send_action({"delta_x": 0.01, "delta_y": 0.0})
+        recorder.step(k / 10, observation, action)
+        observation = episodes.robot.get_observation()
         if k == discard_after:
             recorder.discard()
             return None
     outcome = Outcome(
-        success=True, steps=steps, path_length=0.04, scene_after=episodes.env.unwrapped.scene(), duration_s=0.4
+        success=True, steps=steps, path_length=0.04, scene_after=episodes.robot.read_scene(), duration_s=0.4
     )
     return recorder.end(outcome, 0.0)
 

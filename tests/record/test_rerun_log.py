@@ -9,7 +9,7 @@ import pytest
 from lerobot_contrast.contrast.trial import Outcome
 from lerobot_contrast.record.rerun_log import APPLICATION_ID, LAYOUT_FILE, RerunEpisodeRecorder
 from tests.record.conftest import STEPS, read_rrd, rerun_cli, static_row
-from tests.record.lt_episodes import FEATURES, POSE_KEYS, Episodes, contexts, robot_observation
+from tests.record.lt_episodes import FEATURES, POSE_KEYS, Episodes, contexts
 
 
 def journal(run_dir):
@@ -73,9 +73,9 @@ def test_the_text_says_what_the_perturbation_changed(recorded_run):
 def test_a_discarded_episode_leaves_no_file_and_the_next_one_records(tmp_path):
     episodes, (first, second) = Episodes(), contexts(perturbations=("LB1",))
     recorder = RerunEpisodeRecorder(tmp_path, task=episodes.task)
-    obs, _ = episodes.env.reset(seed=0, options={"instance": first.instance})
+    observation = episodes.stage(first)
     recorder.start(first, FEATURES, POSE_KEYS)
-    recorder.step(0.0, robot_observation(obs), {"delta_x": 0.0, "delta_y": 0.0})
+    recorder.step(0.0, observation, {"delta_x": 0.0, "delta_y": 0.0})
     recorder.discard()
     _, files = episodes.run(recorder, second, steps=3)
     recorder.close()
