@@ -3,6 +3,8 @@ and the runner that drives them."""
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 import sys
 from pathlib import Path
 from typing import Any
@@ -19,13 +21,38 @@ OPERATORS = ("auto", "console")
 DEFAULT_HARDWARE_FPS = 10.0
 
 
-def register_robots() -> None:
-    """Make every robot type known before parsing: LeRobot's plugins and this package's simulated robots."""
+def register_robots() -> dict[str, str]:
+    """Make every robot type known before parsing: LeRobot's own robots and cameras, its plugins and this
+    package's simulated robots. Returns the built-in packages that could not be imported here, with why."""
     from lerobot.utils.import_utils import register_third_party_plugins
 
     import lerobot_contrast.sims.language_table.config_language_table_sim  # noqa: F401
 
+    unavailable = {}
+    for family in ("lerobot.robots", "lerobot.cameras"):
+        for module in pkgutil.iter_modules(importlib.import_module(family).__path__):
+            if module.ispkg:
+                try:
+                    importlib.import_module(f"{family}.{module.name}")
+                except ImportError as error:  # a robot whose optional SDK is not installed
+                    unavailable[module.name] = str(error)
     register_third_party_plugins()
+    return unavailable
+
+
+def check_robot_type(argv: list[str], unavailable: dict[str, str]) -> None:
+    """Name the known robot types when --robot.type is not one of them, instead of argparse's usage dump."""
+    from lerobot.robots import RobotConfig
+
+    given = [arg.split("=", 1)[1] for arg in argv if arg.startswith("--robot.type=")]
+    known = sorted(RobotConfig.get_known_choices())
+    for robot_type in given:
+        if robot_type not in known:
+            missing = "".join(f"; {name} could not be imported ({why})" for name, why in unavailable.items())
+            raise ConfigError(
+                f"--robot.type={robot_type} is not a known robot; known: {', '.join(known)}. A plugin robot "
+                f"needs its package installed (pip install lerobot_robot_{robot_type}){missing}"
+            )
 
 
 def needs_camera(cfg: EvalConfig) -> bool:

@@ -138,6 +138,8 @@ def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
         name = arg.lstrip("-").split("=", 1)[0]
         if name not in known and not name.startswith("robot."):  # robot fields depend on --robot.type
             raise ConfigError(f"unknown flag --{name}; see --help for the flags this command takes")
+        if "=" not in arg and name not in ("help", "h"):
+            raise ConfigError(f"--{name} needs a value, e.g. --{name}=true; flags look like --name=value")
     try:
         return draccus.parse(config_class=cls, args=argv)
     except SystemExit:

@@ -10,7 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from lerobot_contrast.build import make_observers, make_policy, make_robot, make_runner, register_robots
+from lerobot_contrast.build import (
+    check_robot_type,
+    make_observers,
+    make_policy,
+    make_robot,
+    make_runner,
+    register_robots,
+)
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config
 from lerobot_contrast.console import plan_lines, trial_line
 from lerobot_contrast.contrast.errors import UserError
@@ -189,7 +196,8 @@ def run_and_report(
 
 def main(argv: list[str] | None = None) -> int:
     try:
-        register_robots()
+        argv = list(sys.argv[1:] if argv is None else argv)
+        check_robot_type(argv, register_robots())
         return evaluate(parse_config(EvalConfig, argv))
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)

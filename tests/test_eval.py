@@ -117,6 +117,8 @@ def test_dry_run_prints_the_staging_and_writes_nothing(tmp_path, capsys):
         (["--budget=lots"], "invalid flag value"),
         (["--resume=true"], "--resume needs --output_dir"),
         (["--families=[block2nowhere]"], "--families: unknown Language-Table families ['block2nowhere']"),
+        (["--rerun"], "--rerun needs a value, e.g. --rerun=true"),
+        (["--robot.type=so102_follower"], "--robot.type=so102_follower is not a known robot; known: bi_openarm"),
     ],
 )
 def test_bad_input_gets_one_line_naming_the_flag(args, message):
@@ -124,6 +126,18 @@ def test_bad_input_gets_one_line_naming_the_flag(args, message):
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and message in result.stderr, result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_lerobots_own_robots_are_known_and_an_unbuildable_one_leaves_nothing_behind(tmp_path):
+    arm = ["--task=so101_blocks", "--robot.type=so101_follower", "--robot.port=/dev/ttyNONE", "--robot.id=arm"]
+    plan = cli(*arm, "--dry_run=true")
+    assert plan.returncode == 0, plan.stderr
+    assert "plan: " in plan.stdout
+    run = tmp_path / "run"
+    result = cli(*arm, f"--output_dir={run}")
+    assert result.returncode == 2
+    assert result.stderr.count("\n") == 1 and "--robot.type=so1" in result.stderr, result.stderr
+    assert not run.exists()
 
 
 def test_an_existing_run_directory_needs_resume_and_an_unwritable_one_is_named(tmp_path):
