@@ -149,5 +149,14 @@ def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
         raise ConfigError(f"invalid flag value: {message}") from None
 
 
+def resume_args(argv: list[str]) -> list[str]:
+    """With --resume, start from the run's own config.json, so only the flags that change need repeating."""
+    flags = dict(arg.lstrip("-").split("=", 1) for arg in argv if "=" in arg)
+    if flags.get("resume", "").lower() not in ("true", "1", "yes") or "config_path" in flags:
+        return argv
+    stored = Path(flags.get("output_dir", "")) / "config.json"
+    return [f"--config_path={stored}", *argv] if "output_dir" in flags and stored.is_file() else argv
+
+
 def config_json(config: Any) -> dict[str, Any]:
     return draccus.encode(config)

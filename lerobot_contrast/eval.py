@@ -18,7 +18,7 @@ from lerobot_contrast.build import (
     make_runner,
     register_robots,
 )
-from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config
+from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config, resume_args
 from lerobot_contrast.console import plan_lines, trial_line
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
@@ -178,7 +178,7 @@ def run_and_report(
         print(f"stopped: {stop}; {len(run_dir.journal.records)} trials recorded; continue with {resume}")
         return 0
     except RobotLostError as error:
-        print(f"error: {error} ({resume})", file=sys.stderr)
+        print(f"error: {error} with {resume}", file=sys.stderr)
         return 2
     print(format_summary(summary, cost_model.unit))
     spent, ran = summary["overall"]["cumulative_cost"], len(run_dir.journal.records)
@@ -198,7 +198,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         check_robot_type(argv, register_robots())
-        return evaluate(parse_config(EvalConfig, argv))
+        return evaluate(parse_config(EvalConfig, resume_args(argv)))
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -89,8 +89,12 @@ def test_ctrl_c_keeps_every_finished_trial_and_marks_the_summary_incomplete(tmp_
     summary = json.loads((run / "summary.json").read_text())
     assert summary["complete"] is False
     assert pq.read_table(run / "results.parquet").num_rows == len(journal(run)) >= 4
-    assert cli(*LONGER, f"--output_dir={run}", "--resume=true").returncode == 0
-    assert json.loads((run / "summary.json").read_text())["complete"] is True
+    hint = stderr.split("continue with ")[-1].split()
+    assert cli(*hint).returncode == 0  # the run's own config.json supplies every other setting
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["complete"] is True and len(journal(run)) == summary["settings"]["planned_trials"]
+    changed = cli(*hint, "--seed=6")
+    assert changed.returncode == 2 and "--seed=6 (was 5); drop those flags" in changed.stderr
 
 
 def test_the_same_seed_gives_the_same_results(tmp_path):
@@ -110,7 +114,10 @@ def test_dry_run_prints_the_staging_and_writes_nothing(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--perturbations=[LB9]"], "unknown perturbation 'LB9' for task 'language_table'; choose from: L, LB1"),
+        (
+            ["--perturbations=[LB9]"],
+            "--perturbations: unknown perturbation 'LB9' for task 'language_table'; choose from: L, LB1",
+        ),
         (["--budget=0.01"], "--budget 0.01 m is below the cost of staging the first trial"),
         (["--strategy=iid"], "--strategy: unknown strategy 'iid'"),
         (["--n_instance=3"], "unknown flag --n_instance"),

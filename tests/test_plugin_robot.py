@@ -106,9 +106,12 @@ def test_a_robot_that_cannot_reconnect_stops_the_session_resumably(site, tmp_pat
     run = tmp_path / "run"
     result = evaluate(site, run, "--robot.fail_at_action=5", "--robot.can_reconnect=false")
     assert result.returncode == 2
-    assert "no route to host 10.0.0.7" in result.stderr and "--resume=true" in result.stderr
+    assert (
+        "no route to host 10.0.0.7" in result.stderr
+        and f"continue the run with --output_dir={run} --resume=true" in result.stderr
+    )
     assert [r["status"] for r in journal(run)] == ["aborted"]
     assert json.loads((run / "summary.json").read_text())["complete"] is False
-    resumed = evaluate(site, run, "--resume=true")  # the robot is back, with its settings changed
+    resumed = evaluate(site, run, "--resume=true", "--robot.can_reconnect=true")  # back, with a setting changed
     assert resumed.returncode == 0, resumed.stderr
     assert journal(run)[0]["status"] == "aborted" and len(journal(run)) > 1

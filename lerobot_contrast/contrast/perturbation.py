@@ -84,7 +84,10 @@ class PerturbationRegistry:
         """The named perturbations in the given order; all of them when `names` is None."""
         if names is None:
             return list(self._items.values())
-        return [self.get(name) for name in names]
+        try:
+            return [self.get(name) for name in names]
+        except UnknownPerturbationError as error:
+            raise UnknownPerturbationError(f"--perturbations: {error}") from None
 
     def __iter__(self) -> Iterator[Perturbation]:
         return iter(self._items.values())

@@ -61,11 +61,13 @@ def open_run_dir(path: Path, config: dict[str, Any], resume: bool) -> RunDir:
             raise RunDirError(f"--resume: {path} holds no run to resume (no config.json); drop --resume to start one")
         stored = json.loads(config_path.read_text(encoding="utf-8"))
         now, then = _comparable(config), _comparable(stored)
-        changed = sorted(k for k in now if then.get(k) != now[k])
+        changed = [
+            f"--{k}={json.dumps(now[k])} (was {json.dumps(then.get(k))})" for k in sorted(now) if then.get(k) != now[k]
+        ]
         if changed:
             raise RunDirError(
-                f"--resume: {path} was started with different settings ({', '.join(changed)}); "
-                "resume with the original flags or choose a new --output_dir"
+                f"--resume: {path} was started with other settings, {'; '.join(changed)}; drop those flags "
+                "(a resumed run reads its settings from config.json) or choose a new --output_dir"
             )
     else:
         if path.exists() and any(path.iterdir()):

@@ -184,8 +184,8 @@ class RobotRunner:
                 error = reconnect_error
                 time.sleep(self.reconnect_wait_s)
         self._halt = RobotLostError(
-            f"the robot {self.robot} disconnected and could not reconnect ({' '.join(str(error).split())}); "
-            "check it, then continue the run with --resume=true"
+            f"the robot ({self.robot.name}) disconnected and could not reconnect ({' '.join(str(error).split())}); "
+            "check it, then continue the run"
         )
 
     def _scene_after(self, context: TrialContext, episode: Episode) -> Scene:

@@ -127,5 +127,7 @@ def test_unknown_strategy_and_perturbation_name_the_flag_and_the_choices():
     task = ToyTask()
     with pytest.raises(UserError, match="--strategy: unknown strategy 'iid'; choose from: standard, contrast"):
         make_plan("iid", bases(1), [], 1, np.random.default_rng(0))
-    with pytest.raises(UserError, match="unknown perturbation 'LB9' for task 'toy'; choose from: LB, SB, S"):
+    with pytest.raises(
+        UserError, match="--perturbations: unknown perturbation 'LB9' for task 'toy'; choose from: LB, SB, S"
+    ):
         task.perturbations.select(["LB9"])

@@ -102,7 +102,7 @@ def test_an_existing_run_is_not_overwritten_without_resume(tmp_path):
 def test_resume_refuses_changed_settings_and_missing_runs(tmp_path):
     run = tmp_path / "run"
     open_run_dir(run, {"seed": 0, "budget": 5.0}, resume=False)
-    with pytest.raises(RunDirError, match=r"different settings \(budget\)"):
+    with pytest.raises(RunDirError, match=r"other settings, --budget=9.0 \(was 5.0\); drop those flags"):
         open_run_dir(run, {"seed": 0, "budget": 9.0}, resume=True)
     with pytest.raises(RunDirError, match="holds no run to resume"):
         open_run_dir(tmp_path / "nothing", {"seed": 0}, resume=True)

@@ -1,6 +1,8 @@
 """LanguageTableEnv: the benchmark's observation/action interface, exact resets, success, registration."""
 
 import importlib
+import subprocess
+import sys
 import warnings
 
 import gymnasium as gym
@@ -106,6 +108,15 @@ def test_registered_with_gymnasium():
     assert "rgb" not in obs and "is_success" in info
     _, _, _, _, info = env.step(env.action_space.sample())
     assert "is_success" in info
+
+
+def test_a_fresh_interpreter_makes_the_env_from_its_module_qualified_id():
+    code = (
+        "import gymnasium; env = gymnasium.make('lerobot_contrast.sims:lerobot_contrast/LanguageTable-v0');"
+        "print(sorted(env.reset(seed=0)[0]))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["['effector_target_translation',", "'effector_translation',", "'instruction',", "'rgb']"]
 
 
 def test_bad_arguments_get_one_line_errors():

@@ -69,7 +69,7 @@ def test_reference_path_of_a_solved_instance():
     assert reference.length_m > 0.02
 
 
-def test_reference_path_falls_back_to_the_lower_bound():
+def test_reference_path_falls_back_to_a_straight_line_estimate():
     instance = instances("block2absolutelocation", 1, seed=3)[0]
     reference = reference_path(TASK, instance, max_steps=1)
     assert not reference.success
