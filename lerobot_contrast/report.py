@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.record.hub import parse_hub_spec
 from lerobot_contrast.reporting import build_report, load_run
 from lerobot_contrast.stats import METRICS
 
@@ -32,7 +33,7 @@ def parser() -> argparse.ArgumentParser:
         "--output_dir",
         type=Path,
         default=None,
-        help="where to write the report (default: RUN_DIR/report of the first run)",
+        help="where to write the report (default: RUN_DIR/report of the first local run, else ./report)",
     )
     p.add_argument(
         "--metric",
@@ -43,11 +44,17 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def default_output_dir(specs: list[str], runs: list) -> Path:
+    """report/ in the first local run directory; ./report when every input is downloaded (never the Hub cache)."""
+    local = [run for spec, run in zip(specs, runs, strict=True) if parse_hub_spec(spec) is None]
+    return local[0].path / "report" if local else Path("report")
+
+
 def main(argv: list[str] | None = None) -> int:
     try:
         args = parser().parse_args(argv)
         runs = [load_run(spec) for spec in args.runs]
-        output_dir = args.output_dir or runs[0].path / "report"
+        output_dir = args.output_dir or default_output_dir(args.runs, runs)
         try:
             path = build_report(runs, output_dir, args.metric).path
         except OSError as error:

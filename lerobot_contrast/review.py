@@ -5,7 +5,6 @@ in the Rerun viewer, or serve the web viewer on localhost (`--web`, works offlin
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import subprocess
@@ -20,7 +19,7 @@ import rerun.blueprint as rrb
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.trial import TrialRecord
-from lerobot_contrast.record.journal import JOURNAL_VERSION
+from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.rerun_log import APPLICATION_ID
 
 try:  # rerun-sdk 0.38+ moved the chunk API out of `experimental`
@@ -39,25 +38,23 @@ class ReviewError(UserError):
 
 def load_records(run_dir: Path) -> list[TrialRecord]:
     """The journal's records, read without touching the file: the run may still be writing it."""
-    journal = run_dir / "journal.jsonl"
-    if not journal.is_file():
+    if not (run_dir / "journal.jsonl").is_file():
         raise ReviewError(f"{run_dir}: no journal.jsonl; pass a run directory written by lerobot_contrast.eval")
-    complete = journal.read_text(encoding="utf-8").split("\n")[:-1]  # after the last newline: a line being written
-    records = []
-    for number, line in enumerate(complete, start=1):
-        data = json.loads(line) if line.strip() else None
-        if data is not None and data.get("version") != JOURNAL_VERSION:
-            raise ReviewError(
-                f"{journal}: line {number} has journal version {data.get('version')!r}, not {JOURNAL_VERSION}"
-            )
-        records += [] if data is None else [TrialRecord.from_json(data)]
-    return records
+    return read_journal(run_dir / "journal.jsonl")
 
 
 def _names(values: str | None) -> list[str] | None:
     if values is None:
         return None
     return [v.strip().removeprefix("Δ") for v in values.split(",") if v.strip()]
+
+
+def _check_known(flag: str, names: list[str] | None, recorded: set[str]) -> None:
+    """A filter value with no recorded episode is a typo or a perturbation that never applied: say so."""
+    unknown = [name for name in names or [] if name not in recorded]
+    if unknown:
+        shown = ", ".join(sorted(recorded)) if len(recorded) <= 12 else f"{len(recorded)} values"
+        raise ReviewError(f"{flag}: no recorded episode has {', '.join(unknown)}; this run has {shown}")
 
 
 def select(
@@ -80,6 +77,8 @@ def select(
     ]
     if not recorded:
         raise ReviewError("the run recorded no Rerun episodes (its journal names no .rrd files)")
+    _check_known("--perturbation", perturbations, {r.perturbation or ORIGINAL for r in recorded})
+    _check_known("--base", bases, {r.base_id for r in recorded})
     if not chosen:
         seen = sorted({r.perturbation or ORIGINAL for r in recorded})
         raise ReviewError(

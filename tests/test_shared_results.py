@@ -17,7 +17,7 @@ def journal(run) -> list[dict]:
     return [json.loads(line) for line in (run / "journal.jsonl").read_text().splitlines()]
 
 
-def test_publish_compare_and_rerun_a_published_plan(hub, tmp_path):
+def test_publish_compare_and_rerun_a_published_plan(hub, tmp_path, monkeypatch):
     lab_a = tmp_path / "lab_a"
     assert (
         main([*FLAGS, "--record_dataset=true", "--push_to_hub=true", f"--repo_id={REPO}", f"--output_dir={lab_a}"]) == 0
@@ -36,10 +36,14 @@ def test_publish_compare_and_rerun_a_published_plan(hub, tmp_path):
     assert planned == json.loads((lab_a / "plan.json").read_text())
     assert json.loads((lab_b / "config.json").read_text())["seed"] == 4
 
-    assert report_main([f"hub:{REPO}", str(lab_b), f"--output_dir={tmp_path / 'report'}"]) == 0
-    report = (tmp_path / "report" / "report.md").read_text()
+    assert report_main([f"hub:{REPO}", str(lab_b)]) == 0  # written into the local run, not the Hub cache
+    report = (lab_b / "report" / "report.md").read_text()
     assert "oracle" in report and "random" in report
+    assert "## Policies on the same plan" in report  # lab B's --plan and recording flags do not change the design
     assert pq.read_table(lab_b / "results.parquet").num_rows == len(journal(lab_b))
+    monkeypatch.chdir(tmp_path)
+    assert report_main([f"hub:{REPO}"]) == 0
+    assert (tmp_path / "report" / "report.md").exists()
 
 
 def test_push_to_hub_needs_a_repo_id(tmp_path, capsys):

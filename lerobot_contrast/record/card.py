@@ -38,7 +38,7 @@ def _get(data: dict[str, Any], dotted: str) -> Any:
 
 
 def _evaluated(config: dict[str, Any]) -> list[tuple[str, str]]:
-    policy = _get(config, "policy.path") or _get(config, "policy.type") or "?"
+    policy = _get(config, "policy.path") or _get(config, "policy.type") or "oracle"  # PolicyArgs' default
     revision = _get(config, "policy.revision") or "-"
     robot = f"`{_get(config, 'robot.type') or '?'}`"
     families = ", ".join(config.get("families") or []) or "all"

@@ -31,42 +31,16 @@ class Journal:
 
     @classmethod
     def open(cls, path: Path) -> Journal:
-        """Read the journal at `path` (creating it if missing), repairing a torn final line."""
+        """Open the journal at `path` for appending (creating it if missing), dropping a torn final line."""
         if not path.exists():
             path.touch()
             return cls(path, [])
         raw = path.read_bytes()
-        records: list[TrialRecord] = []
-        good_end = 0
-        lines = raw.split(b"\n")
-        for number, line in enumerate(lines, start=1):
-            is_last = number == len(lines)
-            if not line.strip():
-                good_end += len(line) + (0 if is_last else 1)
-                continue
-            try:
-                data = json.loads(line)
-            except json.JSONDecodeError:
-                if is_last:  # torn write from a killed run: drop it
-                    break
-                raise JournalError(f"{path}: line {number} is not valid JSON; the journal is damaged") from None
-            if is_last:  # a complete record always ends with a newline
-                break
-            records.append(cls._decode(path, number, data))
-            good_end += len(line) + 1
+        records, good_end = _parse(path, raw)
         if good_end != len(raw):
             with path.open("r+b") as handle:
                 handle.truncate(good_end)
         return cls(path, records)
-
-    @staticmethod
-    def _decode(path: Path, number: int, data: dict) -> TrialRecord:
-        version = data.pop("version", None)
-        if version != JOURNAL_VERSION:
-            raise JournalError(
-                f"{path}: line {number} has journal version {version!r}, this release reads {JOURNAL_VERSION}"
-            )
-        return TrialRecord.from_json(data)
 
     def append(self, record: TrialRecord) -> None:
         if record.index != len(self.records):
@@ -78,6 +52,40 @@ class Journal:
                 handle.flush()
                 os.fsync(handle.fileno())
             self.records.append(record)
+
+
+def read_journal(path: str | Path) -> list[TrialRecord]:
+    """The records of the journal at `path`, read without touching it: its run may still be writing it."""
+    path = Path(path)
+    if not path.is_file():
+        raise JournalError(f"{path}: no such journal; pass the journal.jsonl of a run directory")
+    return _parse(path, path.read_bytes())[0]
+
+
+def _parse(path: Path, raw: bytes) -> tuple[list[TrialRecord], int]:
+    """The complete records in `raw`, and the byte offset where they end (a line being written, or torn by a
+    kill, has no newline yet and is left out)."""
+    records: list[TrialRecord] = []
+    good_end = 0
+    lines = raw.split(b"\n")
+    for number, line in enumerate(lines[:-1], start=1):  # after the last newline: an incomplete line
+        if line.strip():
+            try:
+                data = json.loads(line)
+            except json.JSONDecodeError:
+                raise JournalError(f"{path}: line {number} is not valid JSON; the journal is damaged") from None
+            records.append(_decode(path, number, data))
+        good_end += len(line) + 1
+    return records, good_end
+
+
+def _decode(path: Path, number: int, data: dict) -> TrialRecord:
+    version = data.pop("version", None)
+    if version != JOURNAL_VERSION:
+        raise JournalError(
+            f"{path}: line {number} has journal version {version!r}, this release reads {JOURNAL_VERSION}"
+        )
+    return TrialRecord.from_json(data)
 
 
 @contextmanager

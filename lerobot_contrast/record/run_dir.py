@@ -46,7 +46,9 @@ def write_json_atomic(path: Path, data: Any) -> None:
     os.replace(tmp, path)
 
 
-def _comparable(config: dict[str, Any]) -> dict[str, Any]:
+def comparable_settings(config: dict[str, Any]) -> dict[str, Any]:
+    """The settings two sessions of one run must share: all but where it is written, who operates it, where it
+    is published and the robot's address."""
     comparable = {k: v for k, v in config.items() if k not in RESUME_FREE_KEYS}
     if isinstance(comparable.get("robot"), dict):  # the same robot may come back at a new address or port
         comparable["robot"] = {"type": comparable["robot"].get("type")}
@@ -60,7 +62,7 @@ def open_run_dir(path: Path, config: dict[str, Any], resume: bool) -> RunDir:
         if not config_path.exists():
             raise RunDirError(f"--resume: {path} holds no run to resume (no config.json); drop --resume to start one")
         stored = json.loads(config_path.read_text(encoding="utf-8"))
-        now, then = _comparable(config), _comparable(stored)
+        now, then = comparable_settings(config), comparable_settings(stored)
         changed = [
             f"--{k}={json.dumps(now[k])} (was {json.dumps(then.get(k))})" for k in sorted(now) if then.get(k) != now[k]
         ]

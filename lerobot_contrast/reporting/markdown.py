@@ -9,7 +9,7 @@ from lerobot_contrast import stats
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.reporting.analysis import Comparison, SummaryRow, VersusFull
 from lerobot_contrast.reporting.figures import METRIC_NAMES
-from lerobot_contrast.reporting.runs import LAUNCH_KEYS, Run
+from lerobot_contrast.reporting.runs import Run
 
 METHODS = {
     "wilson": "Wilson score interval (binary outcomes, independent trials)",
@@ -104,12 +104,16 @@ def comparison_section(items: list[Comparison]) -> list[str]:
     return lines + [*table(header, body), ""]
 
 
+# Settings of one session of a run rather than of the run.
+SESSION_KEYS = ("output_dir", "resume", "dry_run")
+
+
 def flatten(config: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in config.items():
         if isinstance(value, dict) and value:
             out.update(flatten(value, f"{prefix}{key}."))
-        elif prefix or key not in LAUNCH_KEYS:
+        elif prefix or key not in SESSION_KEYS:
             out[prefix + key] = value
     return out
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -14,12 +12,14 @@ import pandas as pd
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.record.hub import resolve_run
-from lerobot_contrast.record.journal import Journal
+from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.results import read_results
+from lerobot_contrast.record.run_dir import comparable_settings
 from lerobot_contrast.stats import frame
 
-# Settings that say where and how a run was launched, not what it evaluated.
-LAUNCH_KEYS = ("output_dir", "resume", "dry_run")
+# Settings that say how a run was recorded or where its plan came from, not what it evaluated (besides those
+# a run may change between sessions, see comparable_settings).
+RECORDING_KEYS = ("plan", "rerun", "record_dataset")
 # Settings a strategy may differ in from the standard run that serves as its full i.i.d. reference.
 STRATEGY_KEYS = ("strategy", "perturbations", "order", "budget")
 
@@ -86,13 +86,10 @@ def _read_json(path: Path) -> dict[str, Any]:
 
 def _read_trials(path: Path) -> pd.DataFrame:
     """The journal is the record of truth (results.parquet is only rewritten when a run stops); it is read
-    from a copy, so a report never repairs or locks the journal of a run still writing it."""
+    without touching it, so a report never repairs the journal of a run still writing it."""
     journal = path / "journal.jsonl"
     if journal.exists():
-        with tempfile.TemporaryDirectory() as tmp:
-            copy = Path(tmp) / journal.name
-            shutil.copyfile(journal, copy)
-            return frame(Journal.open(copy).records)
+        return frame(read_journal(journal))
     if (path / "results.parquet").exists():
         try:
             return frame(read_results(path / "results.parquet"))
@@ -103,7 +100,7 @@ def _read_trials(path: Path) -> pd.DataFrame:
 
 def design(config: dict[str, Any], drop: tuple[str, ...] = ()) -> str:
     """The settings that define what a run evaluated, as a comparable key, leaving out `drop`."""
-    kept = {k: v for k, v in config.items() if k not in LAUNCH_KEYS + drop}
+    kept = {k: v for k, v in comparable_settings(config).items() if k not in RECORDING_KEYS + drop}
     return json.dumps(kept, sort_keys=True, default=str)
 
 

@@ -7,7 +7,7 @@ import pytest
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.trial import TrialRecord
-from lerobot_contrast.record.journal import Journal, JournalError
+from lerobot_contrast.record.journal import Journal, JournalError, read_journal
 from lerobot_contrast.record.run_dir import RunDirError, open_run_dir
 
 
@@ -69,6 +69,17 @@ def test_a_torn_last_line_from_a_killed_run_is_dropped_and_the_file_repaired(tmp
     assert path.read_bytes() == complete
     again.append(record(1))
     assert Journal.open(path).records == [record(0), record(1)]
+
+
+def test_reading_a_journal_being_written_leaves_it_untouched(tmp_path):
+    path = tmp_path / "journal.jsonl"
+    Journal.open(path).append(record(0))
+    writing = path.read_bytes() + json.dumps({"version": 1, **record(1).to_json()}).encode()[:57]
+    path.write_bytes(writing)
+    assert read_journal(str(path)) == [record(0)]
+    assert path.read_bytes() == writing
+    with pytest.raises(JournalError, match="no such journal"):
+        read_journal(tmp_path / "missing.jsonl")
 
 
 def test_damage_before_the_last_line_is_an_error_not_silently_dropped(tmp_path):

@@ -29,8 +29,12 @@ def test_filters_select_by_perturbation_outcome_and_base_and_group_by_base(recor
     assert review.select(all_records, base=bases[1]) == [r for r in all_records if r.base_id == bases[1]]
     failures = review.select(all_records, outcome="failure")
     assert failures == [r for r in all_records if not r.success] and 0 < len(failures) < len(all_records)
-    with pytest.raises(review.ReviewError, match="this run has perturbations LB1, SB1, original"):
-        review.select(all_records, perturbation="LB2")
+    with pytest.raises(review.ReviewError, match="--perturbation: no recorded episode has LB2; this run has LB1, SB1"):
+        review.select(all_records, perturbation="original,LB2")
+    present = {(r.base_id, bool(r.success)) for r in all_records}
+    base, success = next((b, s) for b in bases for s in (True, False) if (b, s) not in present)
+    with pytest.raises(review.ReviewError, match="no recorded episode matches the filters"):
+        review.select(all_records, base=base, outcome="success" if success else "failure")
 
 
 def test_the_merged_recording_puts_each_episode_in_its_own_subtree(recorded_run, tmp_path):
@@ -69,7 +73,8 @@ def test_a_missing_episode_file_is_reported_and_left_out(recorded_run, tmp_path,
     ("args", "message"),
     [
         (["--outcome=maybe"], "error: --outcome must be one of success, failure, got 'maybe'\n"),
-        (["--perturbation=XX"], "error: no recorded episode matches the filters; this run has perturbations"),
+        (["--perturbation=original,XX"], "error: --perturbation: no recorded episode has XX; this run has LB1, SB1"),
+        (["--base=lt-0999"], "error: --base: no recorded episode has lt-0999; this run has lt-"),
         (["--colour=red"], "error: unrecognized arguments: --colour=red (see --help)\n"),
     ],
 )

@@ -46,6 +46,13 @@ def test_the_key_tool_writes_keys_for_both_sides_and_refuses_to_overwrite(tmp_pa
         load_keys(tmp_path / "server.key", "--robot.client_secret_key", secret=True)
 
 
+def test_the_key_tool_runs_as_a_module_without_warnings(tmp_path):
+    command = [sys.executable, "-W", "error", "-m", "lerobot_robot_locobot.keys", str(tmp_path)]
+    result = subprocess.run(command, capture_output=True, text=True)
+    assert result.returncode == 0 and result.stderr == "", result.stderr
+    assert (tmp_path / "server.key_secret").is_file()
+
+
 def test_client_key_options_go_together(tmp_path):
     create_keys(tmp_path)
     with pytest.raises(ValueError, match="set both or neither"):

@@ -12,7 +12,6 @@ from typing import Any
 import zmq
 
 from lerobot_robot_locobot.config_locobot import LocobotConfig
-from lerobot_robot_locobot.keys import secure_client
 from lerobot_robot_locobot.protocol import ProtocolError, address, decode, decode_observation, encode
 
 # While waiting for a step to be acknowledged, the command is sent again this often (it may have been lost).
@@ -73,6 +72,9 @@ class HostLink:
             socket.setsockopt(zmq.REQ_RELAXED, 1)
             socket.setsockopt(zmq.REQ_CORRELATE, 1)
         if self.config.client_secret_key is not None and self.config.server_public_key is not None:
+            # Imported here so that importing the package leaves `python -m lerobot_robot_locobot.keys` clean.
+            from lerobot_robot_locobot.keys import secure_client
+
             flags = ("--robot.client_secret_key", "--robot.server_public_key")
             secure_client(socket, self.config.client_secret_key, self.config.server_public_key, flags)
         socket.connect(address(self.config.host, port))
