@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import sys
+import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -54,13 +56,14 @@ class EvalConfig:
     # The task: a built-in domain (language_table), a shipped task file by name (so101_blocks, lekiwi_fetch),
     # or the path of a task .yaml file.
     task: str = "language_table"
-    # Task families to sample from (default: all of the task's families), e.g. [block2block,separate].
+    # Task families to sample from (default: all of the task's families), e.g. block2block,separate
+    # (or [block2block,separate]).
     families: list[str] | None = None
     # Evaluation strategy: standard (i.i.d., full reset each trial), contrast (Algorithm 1 of the paper), or
     # limited_intervention (new instructions in the current scene, reset only when infeasible).
     strategy: str = "contrast"
     # Perturbations the contrast strategy applies after each base instance, in order (default: all of the
-    # task's), e.g. [LB1,LB2,SB1,SB2].
+    # task's), e.g. LB1,LB2,SB1,SB2.
     perturbations: list[str] | None = None
     # Order in which base instances are visited: iid (as sampled) or cost_aware (same bases, cheaper to stage).
     order: str = "iid"
@@ -117,21 +120,53 @@ class ConfigError(UserError):
     pass
 
 
-def _flag_names(cls: type, prefix: str = "") -> set[str]:
-    names = set()
+def _flag_types(cls: type, prefix: str = "") -> dict[str, Any]:
+    """Every flag of `cls` (nested dataclasses as dotted names) with its type."""
+    types: dict[str, Any] = {}
+    hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         name = prefix + f.name
-        names.add(name)
+        types[name] = hints[f.name]
         default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
         if dataclasses.is_dataclass(default):
-            names |= _flag_names(type(default), name + ".")
-    return names
+            types |= _flag_types(type(default), name + ".")
+    return types
+
+
+def _is_list(tp: Any) -> bool:
+    return typing.get_origin(tp) is list or any(typing.get_origin(a) is list for a in typing.get_args(tp))
+
+
+def _bracket_lists(arg: str, types: dict[str, Any]) -> str:
+    """Accept a bare comma list for a list flag: --perturbations=LB1,LB2 means --perturbations=[LB1,LB2]."""
+    name, _, value = arg.lstrip("-").partition("=")
+    if name in types and _is_list(types[name]) and value and not value.startswith("["):
+        return f"--{name}=[{value}]"
+    return arg
+
+
+def _value_error(message: str) -> str:
+    """draccus's "`flag`: ...: Couldn't parse 'x' into a float" as "--flag: couldn't parse 'x' into a float"."""
+    match = re.match(r"`([\w.]+)`: (.*)", message)
+    if match is None:
+        return f"invalid flag value: {message}; see --help"
+    flag, detail = match.groups()
+    nested = re.match(r".*?: `([\w.]+)`: (.*)", detail)  # a robot field: "RobotConfig: `camera`: ..."
+    if nested is not None:
+        flag, detail = f"{flag}.{nested.group(1)}", nested.group(2)
+    typed = re.search(r"value=(.*?) into field .* of type (.*?)\. Underlying", detail)
+    if typed is not None:  # a dict or other structured value
+        detail = f"could not read {typed.group(1)} as {typed.group(2)}"
+    elif "Couldn't parse" in detail:
+        detail = detail.rsplit(": ", 1)[-1]
+    return f"--{flag}: {detail[0].lower()}{detail[1:]}; see --help for the value it takes"
 
 
 def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
     """Parse LeRobot-style `--name=value` flags, turning any mistake into a one-line ConfigError."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    known = _flag_names(cls) | {"config_path", "help", "h"}
+    types = _flag_types(cls)
+    known = set(types) | {"config_path", "help", "h"}
     for arg in argv:
         if not arg.startswith("-"):
             raise ConfigError(f"unexpected argument {arg!r}; flags look like --name=value (see --help)")
@@ -140,13 +175,13 @@ def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
             raise ConfigError(f"unknown flag --{name}; see --help for the flags this command takes")
         if "=" not in arg and name not in ("help", "h"):
             raise ConfigError(f"--{name} needs a value, e.g. --{name}=true; flags look like --name=value")
+    argv = [_bracket_lists(arg, types) for arg in argv]
     try:
         return draccus.parse(config_class=cls, args=argv)
     except SystemExit:
         raise
     except Exception as error:  # draccus reports bad values with multi-line messages
-        message = " ".join(str(error).split())
-        raise ConfigError(f"invalid flag value: {message}") from None
+        raise ConfigError(_value_error(" ".join(str(error).split()))) from None
 
 
 def resume_args(argv: list[str]) -> list[str]:

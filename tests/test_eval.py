@@ -121,7 +121,9 @@ def test_dry_run_prints_the_staging_and_writes_nothing(tmp_path, capsys):
         (["--budget=0.01"], "--budget 0.01 m is below the cost of staging the first trial"),
         (["--strategy=iid"], "--strategy: unknown strategy 'iid'"),
         (["--n_instance=3"], "unknown flag --n_instance"),
-        (["--budget=lots"], "invalid flag value"),
+        (["--budget=lots"], "--budget: couldn't parse 'lots' into a float; see --help"),
+        (["--rename_map=top"], "--rename_map: could not read 'top' as dict[str, str]; see --help"),
+        (["--robot.type=language_table_sim", "--robot.camera=maybe"], "--robot.camera: couldn't parse 'maybe'"),
         (["--resume=true"], "--resume needs --output_dir"),
         (["--families=[block2nowhere]"], "--families: unknown Language-Table families ['block2nowhere']"),
         (["--rerun"], "--rerun needs a value, e.g. --rerun=true"),
@@ -133,6 +135,13 @@ def test_bad_input_gets_one_line_naming_the_flag(args, message):
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and message in result.stderr, result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_a_list_flag_takes_a_bare_comma_list_as_well_as_brackets():
+    plans = [cli("--n_instances=2", f"--perturbations={value}", "--dry_run=true") for value in ("LB1,SB2", "[LB1,SB2]")]
+    assert plans[0].returncode == 0, plans[0].stderr
+    assert plans[0].stdout == plans[1].stdout
+    assert "ΔSB2" in plans[0].stdout and "ΔLB2" not in plans[0].stdout
 
 
 def test_lerobots_own_robots_are_known_and_an_unbuildable_one_leaves_nothing_behind(tmp_path):
