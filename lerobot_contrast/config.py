@@ -146,20 +146,17 @@ def _bracket_lists(arg: str, types: dict[str, Any]) -> str:
 
 
 def _value_error(message: str) -> str:
-    """draccus's "`flag`: ...: Couldn't parse 'x' into a float" as "--flag: couldn't parse 'x' into a float"."""
-    match = re.match(r"`([\w.]+)`: (.*)", message)
-    if match is None:
+    """draccus's "`robot`: ...: `camera`: Couldn't parse 'x' into a bool" as "--robot.camera: couldn't parse ..."."""
+    fields = re.findall(r"`([\w.]+)`: ", message)
+    if not fields:
         return f"invalid flag value: {message}; see --help"
-    flag, detail = match.groups()
-    nested = re.match(r".*?: `([\w.]+)`: (.*)", detail)  # a robot field: "RobotConfig: `camera`: ..."
-    if nested is not None:
-        flag, detail = f"{flag}.{nested.group(1)}", nested.group(2)
+    detail = message.rsplit("`: ", 1)[1]
     typed = re.search(r"value=(.*?) into field .* of type (.*?)\. Underlying", detail)
     if typed is not None:  # a dict or other structured value
         detail = f"could not read {typed.group(1)} as {typed.group(2)}"
     elif "Couldn't parse" in detail:
         detail = detail.rsplit(": ", 1)[-1]
-    return f"--{flag}: {detail[0].lower()}{detail[1:]}; see --help for the value it takes"
+    return f"--{'.'.join(fields)}: {detail[0].lower()}{detail[1:]}; see --help for the value it takes"
 
 
 def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
