@@ -8,4 +8,5 @@ fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check \
   -e robots/lerobot_robot_locobot \
   -e policies/lerobot_policy_language_table \
+  -e policies/lerobot_policy_tabletop_pointer \
   -e '.[dev]'

@@ -1,0 +1,1 @@
+"""Training the default learned policy: demonstrations, DAgger rounds and LeRobot training runs."""

@@ -1,0 +1,208 @@
+"""The default policy's recipe: oracle demonstrations, `lerobot-train`, then DAgger rounds, all resumable.
+
+Every phase leaves its result in `output_dir` and is skipped when it is already there, so a killed run started
+again with the same settings goes on where it stopped (an unfinished `lerobot-train` run resumes from its last
+checkpoint through LeRobot's own `--resume`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from lerobot_contrast.domains.language_table import board
+from lerobot_contrast.domains.language_table.task import LanguageTableTask
+from lerobot_contrast.training.episodes import NoisyOracle, Simulator, open_dataset, record_episodes
+from lerobot_contrast.training.learner import Learner, Mixture, closed_loop
+
+REPO_ID = "local/tabletop_pointer_demos"
+
+
+@dataclass
+class Recipe:
+    output_dir: Path = Path("outputs/default_policy")
+    seed: int = 0
+    # Oracle demonstrations, executed with this much action noise (labels stay noise-free).
+    demos: int = 1500
+    demo_noise: float = 0.01
+    # Gradient steps of the first training run, then of each DAgger round.
+    steps: int = 5000
+    round_steps: int = 1500
+    batch_size: int = 32
+    num_workers: int = 1
+    # DAgger: learner roll-outs per round, and the oracle's share of executed actions in each round.
+    betas: list[float] = field(default_factory=lambda: [0.5, 0.2, 0.0])
+    dagger_episodes: int = 250
+    max_steps: int = 120
+    # Closed-loop check after training: fresh instances from a seed never used for data.
+    eval_instances: int = 250
+    eval_seed: int = 1_000_003
+    eval_max_steps: int = board.MAX_EPISODE_STEPS
+    device: str = "cpu"
+
+    @property
+    def dataset(self) -> Path:
+        return self.output_dir / "dataset"
+
+    def train_dir(self, round_index: int) -> Path:
+        return self.output_dir / f"train_{round_index}"
+
+    def final_model(self) -> Path:
+        return self.train_dir(len(self.betas)) / "checkpoints" / "last" / "pretrained_model"
+
+
+class Progress:
+    """`progress.json`: finished phases and the CPU seconds spent, kept across restarts."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.state = json.loads(path.read_text()) if path.exists() else {"done": [], "cpu_s": 0.0}
+        self._mark = _cpu_seconds()
+
+    def done(self, phase: str) -> bool:
+        return phase in self.state["done"]
+
+    def finish(self, phase: str) -> None:
+        now = _cpu_seconds()
+        self.state["cpu_s"] += now - self._mark
+        self._mark = now
+        self.state["done"].append(phase)
+        tmp = self.path.with_suffix(".tmp")
+        tmp.write_text(json.dumps(self.state, indent=1))
+        os.replace(tmp, self.path)
+
+
+def _cpu_seconds() -> float:
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def _record(recipe: Recipe, actor, instances, label: str) -> None:
+    dataset = open_dataset(recipe.dataset, REPO_ID)
+    simulator = Simulator(LanguageTableTask())
+    start = time.time()
+    outcomes = record_episodes(dataset, simulator, instances, actor, recipe.max_steps)
+    dataset.finalize()
+    wins = sum(o.success for o in outcomes)
+    print(
+        f"[{label}] {len(outcomes)} episodes, {sum(o.steps for o in outcomes)} frames, "
+        f"success {wins / max(1, len(outcomes)):.2f}, {time.time() - start:.0f} s",
+        flush=True,
+    )
+
+
+def _train(recipe: Recipe, round_index: int) -> None:
+    out = recipe.train_dir(round_index)
+    last = out / "checkpoints" / "last" / "pretrained_model"
+    steps = recipe.steps if round_index == 0 else recipe.round_steps
+    if (out / "checkpoints").exists():
+        args = ["--resume=true", f"--config_path={last / 'train_config.json'}"]
+    else:
+        shutil.rmtree(out, ignore_errors=True)  # lerobot-train refuses an existing output dir without a checkpoint
+        policy = (
+            ["--policy.type=tabletop_pointer"]
+            if round_index == 0
+            else [f"--policy.path={recipe.train_dir(round_index - 1) / 'checkpoints' / 'last' / 'pretrained_model'}"]
+        )
+        args = [
+            f"--dataset.repo_id={REPO_ID}",
+            f"--dataset.root={recipe.dataset}",
+            *policy,
+            "--policy.push_to_hub=false",
+            f"--policy.device={recipe.device}",
+            f"--steps={steps}",
+            f"--batch_size={recipe.batch_size}",
+            f"--save_freq={max(1, min(1000, steps))}",
+            f"--num_workers={recipe.num_workers}",
+            f"--seed={recipe.seed + round_index}",
+            f"--output_dir={out}",
+            "--log_freq=100",
+            "--wandb.enable=false",
+        ]
+    command = [str(Path(sys.executable).parent / "lerobot-train"), *args]
+    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
+    with open(recipe.output_dir / f"train_{round_index}.log", "a") as log:
+        subprocess.run(command, check=True, stdout=log, stderr=subprocess.STDOUT, env=env)
+
+
+def run(recipe: Recipe) -> dict[str, float]:
+    """All phases (skipping finished ones), then the closed-loop check of the final policy."""
+    import torch
+
+    # One thread: this process renders and runs small tensors, where more threads only contend.
+    torch.set_num_threads(1)
+    recipe.output_dir.mkdir(parents=True, exist_ok=True)
+    (recipe.output_dir / "recipe.json").write_text(json.dumps(asdict(recipe), indent=1, default=str))
+    progress = Progress(recipe.output_dir / "progress.json")
+    task = LanguageTableTask()
+    if not progress.done("demos"):
+        rng = np.random.default_rng(recipe.seed)
+        instances = task.sample(recipe.demos, rng)
+        _record(recipe, NoisyOracle(recipe.demo_noise, rng), instances, "demos")
+        progress.finish("demos")
+    for round_index in range(len(recipe.betas) + 1):
+        if not progress.done(f"train_{round_index}"):
+            _train(recipe, round_index)
+            progress.finish(f"train_{round_index}")
+        if round_index < len(recipe.betas) and not progress.done(f"dagger_{round_index}"):
+            rng = np.random.default_rng([recipe.seed, round_index + 1])
+            learner = Learner(recipe.train_dir(round_index) / "checkpoints" / "last" / "pretrained_model")
+            instances = task.sample(recipe.dagger_episodes, rng)
+            _record(recipe, Mixture(learner, recipe.betas[round_index], rng), instances, f"dagger {round_index}")
+            progress.finish(f"dagger_{round_index}")
+    return evaluate(recipe, progress)
+
+
+def evaluate(recipe: Recipe, progress: Progress) -> dict[str, float]:
+    learner = Learner(recipe.final_model())
+    instances = LanguageTableTask().sample(recipe.eval_instances, np.random.default_rng(recipe.eval_seed))
+    figures = closed_loop(learner, Simulator(LanguageTableTask()), instances, recipe.eval_max_steps)
+    figures["train_cpu_s"] = progress.state["cpu_s"]
+    figures["rounds"] = len(recipe.betas)
+    figures["weights_mb"] = sum(p.stat().st_size for p in _shipped_files(recipe.final_model())) / 1e6
+    figures["select_action_ms"] = select_action_ms(learner, instances[0])
+    return figures
+
+
+def select_action_ms(learner: Learner, instance) -> float:
+    """Median wall time of one `select_action` on one CPU thread, on a full-size camera frame."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        simulator = Simulator(LanguageTableTask())
+        robot = instance.scene.robot
+        simulator.physics.set_state(
+            {n: (p.x, p.y, p.yaw) for n, p in instance.scene.objects.items()}, (robot.x, robot.y)
+        )
+        observation = simulator.observation()
+        learner.reset(instance)
+        times = []
+        for _ in range(50):
+            start = time.perf_counter()
+            learner.act(observation)
+            times.append(time.perf_counter() - start)
+        return float(np.median(times) * 1000)
+    finally:
+        torch.set_num_threads(threads)
+
+
+def ship(recipe: Recipe, weights_dir: Path) -> None:
+    """Copy the final policy's files (no training state) into the plugin's shipped `weights/` directory."""
+    weights_dir.mkdir(parents=True, exist_ok=True)
+    for path in _shipped_files(recipe.final_model()):
+        shutil.copy2(path, weights_dir / path.name)
+
+
+def _shipped_files(model_dir: Path) -> list[Path]:
+    return sorted(p for p in model_dir.iterdir() if p.name != "train_config.json")

@@ -1,0 +1,160 @@
+"""`TabletopPointerPolicy`: find the objects in the image, read which to push where, and move the effector.
+
+Training (`forward`) supervises each part with the simulator's privileged targets (`observation.privileged.*`):
+object positions, the pushed object, the goal's anchor objects, offset and keep-away distance, and the oracle's
+action. At evaluation the policy sees only the camera image, the effector state and the instruction.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+from lerobot.policies import PreTrainedPolicy
+from torch import Tensor
+from torch.nn import functional as F  # noqa: N812
+
+from lerobot_policy_tabletop_pointer.configuration_tabletop_pointer import (
+    ACTION_KEY,
+    IMAGE_KEY,
+    PRIVILEGED_PREFIX,
+    STATE_KEY,
+    TabletopPointerConfig,
+)
+from lerobot_policy_tabletop_pointer.network import (
+    ActionHead,
+    InstructionEncoder,
+    ObjectHeatmaps,
+    apply_homography,
+    soft_argmax,
+)
+from lerobot_policy_tabletop_pointer.vocabulary import Tokenizer, build_vocabulary
+
+
+def resize_image(image: Tensor, height: int, width: int) -> Tensor:
+    """(B, 3, H, W) float image -> (B, 3, height, width), averaging pixels (the same op the training data used)."""
+    if image.shape[-2:] == (height, width):
+        return image
+    return F.interpolate(image, size=(height, width), mode="area")
+
+
+def _privileged(batch: dict[str, Any], name: str) -> Tensor:
+    return batch[PRIVILEGED_PREFIX + name].float()
+
+
+class TabletopPointerPolicy(PreTrainedPolicy):
+    config_class = TabletopPointerConfig
+    name = "tabletop_pointer"
+
+    def __init__(self, config: TabletopPointerConfig, dataset_meta: Any = None, **kwargs: Any) -> None:
+        super().__init__(config)
+        if not config.vocabulary and dataset_meta is not None:
+            config.vocabulary = build_vocabulary(dataset_meta.tasks.index)
+        self.config = config
+        self.tokenizer = Tokenizer(config.vocabulary, config.max_words)
+        n = len(config.objects)
+        self.heatmaps = ObjectHeatmaps(n, config.channels)
+        self.instruction = InstructionEncoder(self.tokenizer.size, n, config.word_dim, config.text_dim)
+        self.action_head = ActionHead(config.head_hidden)
+        matrix = torch.tensor(config.image_to_board, dtype=torch.float32)
+        self.register_buffer("image_to_board", matrix, persistent=False)
+        self.register_buffer("board_to_image", torch.linalg.inv(matrix), persistent=False)
+        self.reset()
+
+    def get_optim_params(self) -> dict:
+        return self.parameters()
+
+    def reset(self) -> None:
+        """A new episode: the goal is read again from its first frame."""
+        self._goal: Tensor | None = None
+
+    def perceive(self, batch: dict[str, Any]) -> dict[str, Tensor]:
+        """Object positions (B, K, 2) in metres, heatmap logits, presence logits and the instruction's heads."""
+        image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
+        logits, presence = self.heatmaps(image)
+        positions = apply_homography(self.image_to_board, soft_argmax(logits))
+        text = self.instruction(self.tokenizer(list(batch["task"]), image.device))
+        return {"logits": logits, "presence": presence, "positions": positions, **text}
+
+    def compose(self, seen: dict[str, Tensor]) -> tuple[Tensor, Tensor]:
+        """The pushed object's position and the goal (B, 2), from what `perceive` found."""
+        present = torch.sigmoid(seen["presence"])
+        positions = seen["positions"]
+        source_weights = (seen["source"] + torch.log(present + 1e-6)).softmax(-1)
+        source = (source_weights.unsqueeze(-1) * positions).sum(1)
+        anchors = torch.cat([positions, torch.zeros_like(positions[:, :1])], dim=1)
+        anchor_logits = seen["anchor"] + torch.log(F.pad(present, (0, 1), value=1.0) + 1e-6)
+        distance = (positions - source.unsqueeze(1)).norm(dim=-1)
+        near = present * torch.sigmoid((self.config.neighbour_radius - distance) / 0.005) * (1 - source_weights)
+        near = F.pad(near / near.sum(-1, keepdim=True).clamp(min=1e-6), (0, 1))
+        group = torch.sigmoid(seen["group"]).unsqueeze(-1)
+        weights = (1 - group) * anchor_logits.softmax(-1) + group * near
+        anchor = (weights.unsqueeze(-1) * anchors).sum(1)
+        away = source - anchor
+        away = away / away.norm(dim=-1, keepdim=True).clamp(min=1e-6)
+        return source, anchor + seen["offset"] + seen["away"].unsqueeze(-1) * away
+
+    @torch.no_grad()
+    def select_action(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
+        seen = self.perceive(batch)
+        source, goal = self.compose(seen)
+        if self._goal is None or self._goal.shape != goal.shape:
+            self._goal = goal
+        effector = batch[STATE_KEY][:, 2:4].float()
+        action = self.action_head(effector, source, self._goal) * self.config.max_action
+        return action.clamp(-self.config.max_action, self.config.max_action)
+
+    def predict_action_chunk(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
+        return self.select_action(batch).unsqueeze(1)
+
+    def forward(self, batch: dict[str, Any]) -> tuple[Tensor, dict]:
+        seen = self.perceive(batch)
+        losses = {**self._perception_losses(batch, seen), **self._instruction_losses(batch, seen)}
+        losses["action"] = self._action_loss(batch, seen)
+        with torch.no_grad():
+            _, goal = self.compose(seen)
+            goal_error = (goal - _privileged(batch, "goal_xy")).norm(dim=-1).mean()
+        loss = sum(losses.values())
+        return loss, {**{k: v.item() for k, v in losses.items()}, "goal_error_m": goal_error.item()}
+
+    def _perception_losses(self, batch: dict[str, Any], seen: dict[str, Tensor]) -> dict[str, Tensor]:
+        logits = seen["logits"]
+        b, k, h, w = logits.shape
+        truth = _privileged(batch, "objects_xy").view(b, k, 2)
+        present = _privileged(batch, "objects_present") > 0.5
+        uv = apply_homography(self.board_to_image, truth)
+        col = (uv[..., 0] * w).long().clamp(0, w - 1)
+        row = (uv[..., 1] * h).long().clamp(0, h - 1)
+        cell = row * w + col
+        heatmap = F.cross_entropy(logits.flatten(2)[present], cell[present])
+        position = (seen["positions"] - truth).norm(dim=-1)[present].mean() * 10
+        presence = F.binary_cross_entropy_with_logits(seen["presence"], present.float())
+        return {"heatmap": heatmap, "position": position, "presence": presence}
+
+    def _instruction_losses(self, batch: dict[str, Any], seen: dict[str, Tensor]) -> dict[str, Tensor]:
+        group = _privileged(batch, "group").view(-1)
+        named = group < 0.5
+        anchor = -(_privileged(batch, "anchor") * seen["anchor"].log_softmax(-1)).sum(-1)
+        offset = ((seen["offset"] - _privileged(batch, "offset")) / 0.1).pow(2).sum(-1)
+        away = ((seen["away"] - _privileged(batch, "away").view(-1)) / 0.1).pow(2)
+        return {
+            "source": F.cross_entropy(seen["source"], _privileged(batch, "source").argmax(-1)),
+            "anchor": (anchor * named).sum() / named.sum().clamp(min=1),
+            "group": F.binary_cross_entropy_with_logits(seen["group"], group),
+            "offset": offset.mean() + away.mean(),
+        }
+
+    def _action_loss(self, batch: dict[str, Any], seen: dict[str, Tensor]) -> Tensor:
+        """The action head learns from true positions (with noise) and, at `predicted_input_rate`, the predicted
+        pushed-object position, so it neither depends on perfect perception nor learns from early garbage alone."""
+        b, k = seen["source"].shape
+        truth = _privileged(batch, "objects_xy").view(b, k, 2)
+        source_true = (_privileged(batch, "source").unsqueeze(-1) * truth).sum(1)
+        source_seen, _ = self.compose({key: v.detach() for key, v in seen.items()})
+        use_seen = torch.rand(b, 1, device=truth.device) < self.config.predicted_input_rate
+        noise = self.config.position_noise
+        source = torch.where(use_seen, source_seen, source_true + noise * torch.randn_like(source_true))
+        goal = _privileged(batch, "goal_xy") + noise * torch.randn_like(source_true)
+        effector = batch[STATE_KEY][:, 2:4].float()
+        predicted = self.action_head(effector, source, goal)
+        return F.mse_loss(predicted, batch[ACTION_KEY].float() / self.config.max_action, reduction="sum") / b

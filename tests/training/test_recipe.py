@@ -1,0 +1,57 @@
+"""The default policy's recipe at smoke size: a LeRobotDataset of labelled demonstrations, `lerobot-train`, a DAgger
+round, the closed-loop check, shipping, and resuming without redoing finished work."""
+
+import json
+
+import numpy as np
+import pytest
+from lerobot.datasets import LeRobotDataset
+
+from lerobot_contrast.domains.language_table.task import LanguageTableTask
+from lerobot_contrast.training import targets
+from lerobot_contrast.training.episodes import NoisyOracle, Simulator
+from lerobot_contrast.training.recipe import REPO_ID, Recipe, run, ship
+
+
+def test_demonstration_labels_are_the_noise_free_oracle_even_when_noise_is_executed():
+    task = LanguageTableTask()
+    instance = task.sample(1, np.random.default_rng(5))[0]
+    noisy, clean = [], []
+    Simulator(task).rollout(instance, NoisyOracle(0.0, np.random.default_rng(0)), 5, record=clean.append)
+    Simulator(task).rollout(instance, NoisyOracle(0.05, np.random.default_rng(0)), 5, record=noisy.append)
+    np.testing.assert_array_equal(noisy[0]["action"], clean[0]["action"])  # same start state, same label
+    assert not np.allclose(noisy[-1]["observation.state"], clean[-1]["observation.state"])  # noise was executed
+    assert set(targets.features()) <= set(noisy[0])
+    assert noisy[0]["task"] == instance.instruction
+
+
+@pytest.mark.slow
+def test_smoke_recipe_trains_with_lerobot_and_resumes_without_redoing_work(tmp_path):
+    recipe = Recipe(
+        output_dir=tmp_path / "run",
+        demos=6,
+        steps=6,
+        round_steps=4,
+        betas=[0.5],
+        dagger_episodes=2,
+        num_workers=0,
+        eval_instances=3,
+        eval_max_steps=20,
+    )
+    figures = run(recipe)
+    assert set(figures) >= {"success", "train_cpu_s", "rounds", "weights_mb", "select_action_ms"}
+    assert 0.0 <= figures["success"] <= 1.0 and figures["rounds"] == 1 and figures["train_cpu_s"] > 0
+    progress = json.loads((recipe.output_dir / "progress.json").read_text())
+    assert progress["done"] == ["demos", "train_0", "dagger_0", "train_1"]
+    dataset = LeRobotDataset(REPO_ID, root=recipe.dataset)
+    episodes = dataset.meta.total_episodes
+    assert 6 <= episodes <= 8 and "observation.privileged.goal_xy" in dataset.features
+    assert (recipe.train_dir(1) / "checkpoints" / "last" / "pretrained_model" / "model.safetensors").exists()
+
+    again = run(recipe)  # every phase is finished: nothing is recorded or trained again
+    assert LeRobotDataset(REPO_ID, root=recipe.dataset).meta.total_episodes == episodes
+    assert again["success"] == figures["success"]
+
+    ship(recipe, tmp_path / "weights")
+    shipped = sorted(p.name for p in (tmp_path / "weights").iterdir())
+    assert "model.safetensors" in shipped and "config.json" in shipped and "train_config.json" not in shipped
