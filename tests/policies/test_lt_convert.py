@@ -28,12 +28,12 @@ def _frames(seed: int) -> np.ndarray:
     return np.random.default_rng(seed).uniform(size=(1, 4, 3, 180, 320)).astype(np.float32)
 
 
-def _flax_action(variables: dict, clip: tuple, frames: np.ndarray, instruction: str) -> np.ndarray:
+def _flax_action(model: SequenceLAVMSE, variables: dict, frames: np.ndarray, instruction: str) -> np.ndarray:
     # The benchmark's crop done with jax: rows 4..175, columns 8..312, resized back to 180x320.
     rgb = frames.transpose(0, 1, 3, 4, 2)[:, :, 4:175, 8:312]
     rgb = jax.image.resize(rgb, (1, 4, 180, 320, 3), method="bilinear", antialias=False)
     tokens = ClipTokenizer()(instruction)[None].astype(np.int32)
-    return np.asarray(jax.jit(SequenceLAVMSE(clip).apply)(variables, rgb, tokens))
+    return np.asarray(jax.jit(model.apply)(variables, rgb, tokens))
 
 
 def _torch_action(policy: LanguageTablePolicy, frames: np.ndarray, instruction: str) -> np.ndarray:
@@ -46,7 +46,7 @@ def test_converted_policy_computes_what_the_flax_network_computes(small_variable
     policy = LanguageTablePolicy.from_pretrained(converted)
     frames = _frames(1)
     np.testing.assert_allclose(
-        _torch_action(policy, frames, INSTRUCTION), _flax_action(small_variables, SMALL_CLIP, frames, INSTRUCTION),
+        _torch_action(policy, frames, INSTRUCTION), _flax_action(SequenceLAVMSE(SMALL_CLIP), small_variables, frames, INSTRUCTION),
         atol=1e-4, rtol=1e-4,
     )  # fmt: skip
 
@@ -135,6 +135,6 @@ def test_full_size_checkpoint_converts_and_matches_flax(tmp_path):
     assert sum(p.numel() for p in policy.parameters()) == 67_322_434 - 1_435_392
     frames = _frames(2)
     np.testing.assert_allclose(
-        _torch_action(policy, frames, INSTRUCTION), _flax_action(variables, FULL_CLIP, frames, INSTRUCTION),
+        _torch_action(policy, frames, INSTRUCTION), _flax_action(SequenceLAVMSE(FULL_CLIP), variables, frames, INSTRUCTION),
         atol=1e-4, rtol=1e-4,
     )  # fmt: skip

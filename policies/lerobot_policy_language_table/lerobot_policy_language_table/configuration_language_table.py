@@ -1,7 +1,7 @@
 """`LanguageTableConfig`: the released Language-Table BC policy (LAVA with a ResNet stem and CLIP), type `language_table`.
 
-Defaults are the released checkpoint's (`language_table_resnet_sim_local` config); the CLIP fields exist so tests can
-build a narrower text tower.
+Defaults are the released checkpoint's (`language_table_resnet_sim_local` config); the converter sets every size a
+checkpoint determines, so a lab's own LAVA trained at other widths, heads or depths loads as well.
 """
 
 from __future__ import annotations
@@ -47,7 +47,12 @@ class LanguageTableConfig(PreTrainedConfig):
     sequence_length: int = 4
     crop_factor: float = 0.95
     resnet_input_size: int = 224
+    # Channels of the ResNet stem (`64 * width_factor` upstream) and of the two pyramid convolutions after it.
+    resnet_width: int = 64
+    pyramid_channels: tuple[int, int] = (128, 256)
     d_model: int = 128
+    # Attention heads of the language-to-pixel fusion layers (fixed at 2 upstream) and of the temporal transformer.
+    fusion_heads: int = 2
     num_heads: int = 2
     fusion_layers: int = 4
     temporal_layers: int = 2
@@ -95,6 +100,10 @@ class LanguageTableConfig(PreTrainedConfig):
             raise ValueError(f"language_table takes exactly one camera image input, got {sorted(images) or 'none'}")
         if images[self.image_key].shape[0] != 3:
             raise ValueError(f"language_table needs an RGB image (3, H, W), got {images[self.image_key].shape}")
+        if len(self.pyramid_channels) != 2:
+            raise ValueError(
+                f"pyramid_channels holds the widths of the 2 pyramid convolutions, got {self.pyramid_channels}"
+            )
         action = self.output_features.get(ACTION_KEY)
         if action is None or tuple(action.shape) != (2,):
             raise ValueError(f"language_table outputs a 2-D action {ACTION_KEY!r}, got {self.output_features}")

@@ -8,6 +8,8 @@ Every parameter and batch statistic is mapped with a shape check; anything missi
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -19,8 +21,9 @@ import torch
 from huggingface_hub import HfApi
 from huggingface_hub.errors import HfHubHTTPError
 
+from lerobot_policy_language_table.architecture import entry, network_sizes, resnet_stage_sizes
 from lerobot_policy_language_table.configuration_language_table import ACTION_KEY, LanguageTableConfig
-from lerobot_policy_language_table.flax_checkpoint import CheckpointError, flatten, read_checkpoint
+from lerobot_policy_language_table.flax_checkpoint import DAMAGED, CheckpointError, flat_weights, read_checkpoint
 from lerobot_policy_language_table.model_card import model_card
 from lerobot_policy_language_table.modeling_language_table import LanguageTablePolicy
 from lerobot_policy_language_table.param_map import UNUSED_PREFIX, to_torch_layout, torch_key, unused_resnet_shapes
@@ -29,7 +32,6 @@ from lerobot_policy_language_table.processor_language_table import make_language
 MODEL_COLLECTIONS = ("params", "batch_stats")
 # Training state the policy does not need: the optimiser's moments and the step counter.
 IGNORED_ENTRIES = ("opt_state", "step")
-TEXT = "params/encoder/TextEncoder_0"
 
 
 def _require(tree: dict[str, Any], path: str) -> Any:
@@ -41,41 +43,20 @@ def _require(tree: dict[str, Any], path: str) -> Any:
     return node
 
 
-def text_tower_size(flat: dict[str, np.ndarray]) -> dict[str, int]:
-    """The CLIP text tower's size read from the checkpoint (the released one is ViT-B/16's: 512 wide, 12 layers)."""
-    vocab, width = _require_flat(flat, f"{TEXT}/token_embedding/embedding").shape
-    heads = _require_flat(flat, f"{TEXT}/transformer/resblocks.0/attn/query/kernel").shape[1]
-    layers = len({k.split("/")[4] for k in flat if k.startswith(f"{TEXT}/transformer/resblocks.")})
-    return {
-        "clip_vocab_size": vocab,
-        "clip_width": width,
-        "clip_heads": heads,
-        "clip_layers": layers,
-        "clip_context_length": _require_flat(flat, f"{TEXT}/positional_embedding").shape[0],
-        "clip_embed_dim": _require_flat(flat, f"{TEXT}/text_projection/kernel").shape[1],
-    }
-
-
-def _require_flat(flat: dict[str, np.ndarray], path: str) -> np.ndarray:
-    if path not in flat:
-        raise CheckpointError(f"the checkpoint has no {path!r}: is it the Language-Table BC checkpoint?")
-    return flat[path]
-
-
-def _check_unused(flat: dict[str, np.ndarray]) -> None:
-    expected = unused_resnet_shapes()
+def _check_unused(flat: dict[str, np.ndarray], width: int) -> None:
+    expected = unused_resnet_shapes(width, resnet_stage_sizes(flat))
     for path, shape in expected.items():
-        found = _require_flat(flat, path)
+        found = entry(flat, path)
         if found.shape != shape:
             raise CheckpointError(f"{path} has shape {found.shape}, expected {shape}")
     extra = [p for p in flat if p.split("/", 1)[1].startswith(UNUSED_PREFIX) and p not in expected]
     if extra:
-        raise CheckpointError(f"left over: checkpoint entry {extra[0]} is not part of the released ResNet stages")
+        raise CheckpointError(f"left over: checkpoint entry {extra[0]} is not part of the ResNet's stages")
 
 
 def load_state_dict(policy: LanguageTablePolicy, flat: dict[str, np.ndarray]) -> None:
     """Copy every checkpoint entry into `policy.model`; raise on a shape mismatch, an unmapped or a missing entry."""
-    _check_unused(flat)
+    _check_unused(flat, policy.config.resnet_width)
     state = policy.model.state_dict()
     filled: set[str] = set()
     for path, value in flat.items():
@@ -98,43 +79,81 @@ def load_state_dict(policy: LanguageTablePolicy, flat: dict[str, np.ndarray]) ->
     policy.model.load_state_dict(state)
 
 
+def _statistic(stats: dict[str, Any], name: str) -> np.ndarray:
+    path, value = f"norm_info/action_statistics/{name}", _require(stats, name)
+    try:
+        array = np.array(value, dtype=np.float32)
+    except (TypeError, ValueError) as err:
+        raise CheckpointError(f"{path} is {value!r:.40}, not 2 numbers: {DAMAGED}") from err
+    if array.shape != (2,) or not np.isfinite(array).all():
+        raise CheckpointError(f"{path} must hold 2 finite numbers (one per action axis), got {value!r:.60}")
+    return array
+
+
 def action_statistics(checkpoint: dict[str, Any]) -> dict[str, torch.Tensor]:
     """The action mean and std the network's outputs are de-normalised with (std floored at float32 eps, as released)."""
     stats = _require(checkpoint, "norm_info/action_statistics")
-    mean = np.array(_require(stats, "mean"), dtype=np.float32)
-    std = np.array(_require(stats, "std"), dtype=np.float32)
-    if mean.shape != (2,) or std.shape != (2,):
-        raise CheckpointError(f"norm_info/action_statistics must hold 2-D mean and std, got {mean.shape}, {std.shape}")
-    std = np.maximum(std, np.finfo(np.float32).eps)
-    return {"mean": torch.from_numpy(mean), "std": torch.from_numpy(std)}
+    std = np.maximum(_statistic(stats, "std"), np.finfo(np.float32).eps)
+    return {"mean": torch.from_numpy(_statistic(stats, "mean")), "std": torch.from_numpy(std)}
+
+
+def _step(checkpoint: dict[str, Any]) -> int | None:
+    step = checkpoint.get("step")
+    if step is not None and (isinstance(step, bool) or not isinstance(step, int | np.integer)):
+        raise CheckpointError(f"the checkpoint's step is {step!r:.40}, not an integer: {DAMAGED}")
+    return None if step is None else int(step)
+
+
+def _check_out_dir(out_dir: Path) -> None:
+    """Refuse an OUT_DIR that cannot become the converted policy's folder, before the (slow) conversion."""
+    try:
+        if out_dir.is_dir() and any(out_dir.iterdir()):
+            raise CheckpointError(f"{out_dir} already exists and is not empty; choose a new OUT_DIR")
+    except OSError as err:
+        raise CheckpointError(f"cannot read {out_dir} ({err.strerror}); choose a new OUT_DIR") from err
+    existing = next((p for p in (out_dir, *out_dir.parents) if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        raise CheckpointError(f"{existing} is a file, not a directory; choose a new OUT_DIR")
+
+
+def _write(out_dir: Path, policy: LanguageTablePolicy, stats: dict[str, Any], card: str) -> None:
+    """Write the policy folder next to OUT_DIR and rename it at the end, so no OUT_DIR looks done but is not."""
+    partial, created = None, [p for p in out_dir.parents if not p.exists()]
+    try:
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        folder = out_dir.with_name(f"{out_dir.name}.partial-{os.getpid()}")
+        folder.mkdir()
+        partial = folder  # set once made: a folder that was there before is never removed
+        policy.save_pretrained(partial)
+        for pipeline in make_language_table_pre_post_processors(policy.config, dataset_stats=stats):
+            pipeline.save_pretrained(partial)
+        (partial / "README.md").write_text(card)
+        if out_dir.exists():
+            out_dir.rmdir()
+        partial.rename(out_dir)
+    except OSError as err:
+        raise CheckpointError(f"cannot write {out_dir} ({err.strerror or err}); choose a writable OUT_DIR") from err
+    finally:
+        if partial is not None:
+            shutil.rmtree(partial, ignore_errors=True)
+        for parent in created:  # the folders made for OUT_DIR, deepest first: removed unless OUT_DIR is in them
+            with contextlib.suppress(OSError):
+                parent.rmdir()
 
 
 def convert(checkpoint_path: str | Path, out_dir: str | Path) -> Path:
     """Write config.json, model.safetensors, the processor files and README.md to `out_dir`; return it."""
     out_dir = Path(out_dir)
-    if out_dir.exists() and any(out_dir.iterdir()):
-        raise CheckpointError(f"{out_dir} already exists and is not empty; choose a new OUT_DIR")
+    _check_out_dir(out_dir)
     checkpoint = read_checkpoint(checkpoint_path)
-    unknown = sorted(set(checkpoint) - {*MODEL_COLLECTIONS, *IGNORED_ENTRIES, "norm_info"})
+    unknown = sorted(map(str, set(checkpoint) - {*MODEL_COLLECTIONS, *IGNORED_ENTRIES, "norm_info"}))
     if unknown:
         raise CheckpointError(f"left over: unexpected top-level checkpoint entries {unknown}")
-    flat = {f"{c}/{k}": v for c in MODEL_COLLECTIONS for k, v in flatten(_require(checkpoint, c)).items()}
-    config = LanguageTableConfig(device="cpu", **text_tower_size(flat))
-    policy = LanguageTablePolicy(config)
+    flat = {k: v for c in MODEL_COLLECTIONS for k, v in flat_weights(_require(checkpoint, c), c).items()}
+    policy = LanguageTablePolicy(LanguageTableConfig(device="cpu", **network_sizes(flat)))
     load_state_dict(policy, flat)
     stats = {ACTION_KEY: action_statistics(checkpoint)}
-
-    # Written next to OUT_DIR and renamed at the end, so an interrupted conversion leaves no OUT_DIR that looks done.
-    partial = out_dir.with_name(out_dir.name + ".partial")
-    shutil.rmtree(partial, ignore_errors=True)
-    policy.save_pretrained(partial)
-    for pipeline in make_language_table_pre_post_processors(config, dataset_stats=stats):
-        pipeline.save_pretrained(partial)
-    step = checkpoint.get("step")
-    (partial / "README.md").write_text(model_card(Path(checkpoint_path).name, None if step is None else int(step)))
-    if out_dir.exists():
-        out_dir.rmdir()
-    partial.rename(out_dir)
+    _write(out_dir, policy, stats, model_card(Path(checkpoint_path).name, _step(checkpoint)))
     return out_dir
 
 

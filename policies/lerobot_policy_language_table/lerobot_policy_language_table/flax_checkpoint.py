@@ -6,6 +6,8 @@ same, 0-d) and Python complex numbers as extension 2.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -13,29 +15,63 @@ import msgpack
 import numpy as np
 
 EXT_NDARRAY, EXT_COMPLEX, EXT_NPSCALAR = 1, 2, 3
+NUMERIC_KINDS = "biufc"
+
+
+DAMAGED = "the checkpoint is damaged or not a Language-Table BC checkpoint; convert an intact one"
 
 
 class CheckpointError(ValueError):
     """The checkpoint file cannot be read or does not hold the released network."""
 
 
-def _array(data: bytes) -> np.ndarray:
-    shape, dtype_name, buffer = msgpack.unpackb(data, raw=True)
+@dataclass(frozen=True)
+class Undecodable:
+    """An extension value that does not decode; kept in the tree so the error can name its path."""
+
+    reason: str
+
+    def __repr__(self) -> str:
+        return f"an undecodable value ({self.reason})"
+
+
+def _array(data: bytes) -> np.ndarray | Undecodable:
     try:
-        dtype = np.dtype(dtype_name.decode())
-    except TypeError as err:
-        raise CheckpointError(f"array of unsupported dtype {dtype_name.decode()!r} in the checkpoint") from err
+        shape, dtype_name, buffer = msgpack.unpackb(data, raw=True)
+    except (TypeError, ValueError):
+        return Undecodable("not a (shape, dtype, bytes) triple")
+    if not isinstance(dtype_name, bytes) or not isinstance(buffer, bytes):
+        return Undecodable(f"dtype {dtype_name!r:.30} is not a dtype name")
+    name = dtype_name.decode(errors="replace")
+    try:
+        dtype = np.dtype(name)
+    except (TypeError, ValueError):
+        return Undecodable(f"unsupported dtype {name!r:.30}")
+    if dtype.kind not in NUMERIC_KINDS:
+        return Undecodable(f"unsupported dtype {name!r:.30}")
+    if not isinstance(shape, list | tuple) or not all(isinstance(n, int) and n >= 0 for n in shape):
+        return Undecodable(f"shape {shape!r:.30} is not a list of sizes")
+    if len(buffer) != dtype.itemsize * math.prod(shape):
+        return Undecodable(f"shape {tuple(shape)} of {dtype} but {len(buffer)} bytes")
     return np.frombuffer(buffer, dtype=dtype).reshape(shape)
+
+
+def _complex(data: bytes) -> complex | Undecodable:
+    try:
+        real, imag = msgpack.unpackb(data)
+        return complex(real, imag)
+    except (TypeError, ValueError):
+        return Undecodable("not a complex number")
 
 
 def _ext_hook(code: int, data: bytes) -> Any:
     if code == EXT_NDARRAY:
         return _array(data)
     if code == EXT_NPSCALAR:
-        return _array(data)[()]
+        value = _array(data)
+        return value if isinstance(value, Undecodable) else value[()]
     if code == EXT_COMPLEX:
-        real, imag = msgpack.unpackb(data)
-        return complex(real, imag)
+        return _complex(data)
     raise CheckpointError(f"unknown msgpack extension type {code} in the checkpoint (not a Flax checkpoint?)")
 
 
@@ -59,13 +95,33 @@ def read_checkpoint(path: str | Path) -> dict[str, Any]:
     return state
 
 
-def flatten(tree: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    """{"a": {"b": x}} -> {"a/b": x}, the path notation of Flax parameter trees."""
-    flat: dict[str, Any] = {}
-    for key, value in tree.items():
-        path = f"{prefix}{key}"
-        if isinstance(value, dict):
-            flat.update(flatten(value, f"{path}/"))
-        else:
-            flat[path] = value
-    return flat
+def _weights(path: str, value: Any) -> np.ndarray:
+    if not isinstance(value, np.ndarray):
+        found = value if isinstance(value, Undecodable) else f"the {type(value).__name__} {value!r:.20}"
+        raise CheckpointError(f"{path} is {found}, not an array of weights: {DAMAGED}")
+    if value.dtype.kind != "f":
+        raise CheckpointError(f"{path} holds {value.dtype} values, not floating-point weights: {DAMAGED}")
+    bad = value.size - int(np.count_nonzero(np.isfinite(value)))
+    if bad:
+        raise CheckpointError(
+            f"{path} holds {bad} NaN or infinite values (training diverged or the file is damaged); "
+            "convert a checkpoint whose weights are all finite"
+        )
+    return value
+
+
+def flat_weights(tree: Any, name: str) -> dict[str, np.ndarray]:
+    """{"a": {"b": x}} -> {"name/a/b": x}, the path notation of Flax parameter trees; every leaf a finite float array."""
+    if not isinstance(tree, dict):
+        raise CheckpointError(f"{name} is a {type(tree).__name__}, not a tree of named weights: {DAMAGED}")
+    flat: dict[str, np.ndarray] = {}
+    todo = [(name, tree)]
+    while todo:  # a loop, not recursion: msgpack nests 1,000 deep, as deep as Python's recursion limit
+        prefix, node = todo.pop()
+        for key, value in node.items():
+            path = f"{prefix}/{key}"
+            if isinstance(value, dict):
+                todo.append((path, value))
+            else:
+                flat[path] = _weights(path, value)
+    return dict(sorted(flat.items()))

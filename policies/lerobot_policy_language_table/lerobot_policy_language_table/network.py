@@ -27,8 +27,6 @@ from lerobot_policy_language_table.layers import (
 
 LAYER_NORM_EPS = 1e-6  # flax.linen.LayerNorm's default, used everywhere outside CLIP
 BATCH_NORM_EPS = 1e-5
-STEM_WIDTH = 64
-PYRAMID_CHANNELS = (128, 256)
 
 
 class ResNetStem(nn.Module):
@@ -38,23 +36,24 @@ class ResNetStem(nn.Module):
     (the converter checks and reports them).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, width: int) -> None:
         super().__init__()
-        self.init_conv = SameConv2d(3, STEM_WIDTH, 7, stride=2, bias=False)
-        self.init_bn = nn.BatchNorm2d(STEM_WIDTH, eps=BATCH_NORM_EPS)
+        self.init_conv = SameConv2d(3, width, 7, stride=2, bias=False)
+        self.init_bn = nn.BatchNorm2d(width, eps=BATCH_NORM_EPS)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return max_pool_same(F.relu(self.init_bn(self.init_conv(x))), 3, 2)
 
 
 class VisualEncoder(nn.Module):
-    """Frames (N, 3, H, W) in [0, 1] -> pyramid levels 2, 3, 4: (N, 128, 28, 28), (N, 256, 14, 14), (N, 256, 7, 7)."""
+    """Frames (N, 3, H, W) in [0, 1] -> pyramid levels 2, 3, 4, as released (N, 128, 28, 28), (N, 256, 14, 14),
+    (N, 256, 7, 7)."""
 
-    def __init__(self, input_size: int) -> None:
+    def __init__(self, input_size: int, stem_width: int, pyramid_channels: tuple[int, int]) -> None:
         super().__init__()
         self.input_size = input_size
-        self.resnet = ResNetStem()
-        channels = (STEM_WIDTH, *PYRAMID_CHANNELS)
+        self.resnet = ResNetStem(stem_width)
+        channels = (stem_width, *pyramid_channels)
         self.pyramid_convs = nn.ModuleList(SameConv2d(i, o, 3) for i, o in zip(channels, channels[1:], strict=False))
 
     def forward(self, frames: torch.Tensor) -> list[torch.Tensor]:
@@ -72,11 +71,11 @@ class VisualEncoder(nn.Module):
 class VisualTokens(nn.Module):
     """Pyramid levels -> (N, 784 + 196 + 49, d_model) tokens: projected, scaled by sqrt(d_model), 2-D encoded."""
 
-    def __init__(self, d_model: int, input_size: int) -> None:
+    def __init__(self, d_model: int, input_size: int, pyramid_channels: tuple[int, int]) -> None:
         super().__init__()
         self.d_model = d_model
         sizes = [input_size // 4 // 2**k for k in (1, 2, 3)]
-        self.dense = nn.ModuleList(nn.Linear(c, d_model) for c in (*PYRAMID_CHANNELS, PYRAMID_CHANNELS[-1]))
+        self.dense = nn.ModuleList(nn.Linear(c, d_model) for c in (*pyramid_channels, pyramid_channels[-1]))
         for k, size in enumerate(sizes):
             self.register_buffer(f"pos_{k}", positional_encoding_2d(d_model, size, size), persistent=False)
 
@@ -176,13 +175,14 @@ class LanguageTableNet(nn.Module):
         super().__init__()
         c, d = config, config.d_model
         self.d_model = d
-        self.vision = VisualEncoder(c.resnet_input_size)
-        self.tokens = VisualTokens(d, c.resnet_input_size)
+        pyramid = tuple(c.pyramid_channels)
+        self.vision = VisualEncoder(c.resnet_input_size, c.resnet_width, pyramid)
+        self.tokens = VisualTokens(d, c.resnet_input_size, pyramid)
         self.text = ClipTextEncoder(
             c.clip_vocab_size, c.clip_context_length, c.clip_width, c.clip_heads, c.clip_layers, c.clip_embed_dim
         )
         self.lang_proj = nn.Linear(c.clip_embed_dim, d)
-        self.fusion = nn.ModuleList(FusionLayer(d, c.num_heads) for _ in range(c.fusion_layers))
+        self.fusion = nn.ModuleList(FusionLayer(d, c.fusion_heads) for _ in range(c.fusion_layers))
         self.fusion_norm = nn.LayerNorm(d, eps=LAYER_NORM_EPS)
         self.temporal = TemporalTransformer(d, c.num_heads, c.temporal_layers, c.sequence_length)
         self.head = DenseResnet(d, c.dense_resnet_width, c.dense_resnet_blocks)

@@ -99,14 +99,16 @@ def _bottleneck_shapes(block: str, c_in: int, filters: int, projection: bool) ->
     return shapes
 
 
-def unused_resnet_shapes() -> dict[str, tuple[int, ...]]:
-    """Shapes of the ResNet stage 1 (3 bottlenecks, 64 filters) and stage 2 (4, 128) entries of the checkpoint.
+def unused_resnet_shapes(width: int, stage_sizes: tuple[int, ...]) -> dict[str, tuple[int, ...]]:
+    """Shapes of the ResNet stages' entries: stage i has `stage_sizes[i]` bottlenecks of `width * 2**i` filters
+    (released: 3 of 64, then 4 of 128).
 
-    The released network computes these stages but reads neither output, so they are checked, not converted.
+    The released network computes these stages but reads no output of theirs, so they are checked, not converted.
     """
     shapes: dict[str, tuple[int, ...]] = {}
-    c_in = 64
-    for stage, (blocks, filters) in enumerate(((3, 64), (4, 128)), start=1):
+    c_in = width
+    for stage, blocks in enumerate(stage_sizes, start=1):
+        filters = width * 2 ** (stage - 1)
         for k in range(1, blocks + 1):
             block = f"{UNUSED_PREFIX}{stage}/block{k}"
             shapes.update(_bottleneck_shapes(block, c_in, filters, projection=k == 1))
