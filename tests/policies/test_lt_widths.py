@@ -170,6 +170,7 @@ def test_every_width_the_checkpoint_determines_is_in_the_config(small):
     }  # fmt: skip
     clip = [config[f"clip_{k}"] for k in ("width", "heads", "layers", "embed_dim")]
     assert tuple(clip) == SMALL.clip
+    assert "released architecture at other sizes: `clip_width=32`" in (small[1] / "README.md").read_text()
 
 
 def test_small_lava_loads_through_lerobots_factories_and_matches_flax(small):

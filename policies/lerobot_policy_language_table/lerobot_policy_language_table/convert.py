@@ -150,10 +150,13 @@ def convert(checkpoint_path: str | Path, out_dir: str | Path) -> Path:
     if unknown:
         raise CheckpointError(f"left over: unexpected top-level checkpoint entries {unknown}")
     flat = {k: v for c in MODEL_COLLECTIONS for k, v in flat_weights(_require(checkpoint, c), c).items()}
-    policy = LanguageTablePolicy(LanguageTableConfig(device="cpu", **network_sizes(flat)))
+    sizes = network_sizes(flat)
+    policy = LanguageTablePolicy(LanguageTableConfig(device="cpu", **sizes))
     load_state_dict(policy, flat)
     stats = {ACTION_KEY: action_statistics(checkpoint)}
-    _write(out_dir, policy, stats, model_card(Path(checkpoint_path).name, _step(checkpoint)))
+    released = LanguageTableConfig(device="cpu")
+    other_sizes = {k: v for k, v in sizes.items() if v != getattr(released, k)}
+    _write(out_dir, policy, stats, model_card(Path(checkpoint_path).name, _step(checkpoint), other_sizes))
     return out_dir
 
 

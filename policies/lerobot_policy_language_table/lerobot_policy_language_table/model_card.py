@@ -26,7 +26,8 @@ Licence: the checkpoint was released without a licence of its own (the Language-
 """
 
 
-def model_card(source: str, step: int | None) -> str:
+def model_card(source: str, step: int | None, other_sizes: dict[str, object]) -> str:
+    """The card; `other_sizes` are the config sizes in which this checkpoint's network differs from the released one."""
     data = ModelCardData(
         library_name="lerobot",
         pipeline_tag="robotics",
@@ -34,4 +35,7 @@ def model_card(source: str, step: int | None) -> str:
         tags=["lerobot", "robotics", "language_table", "behavior-cloning"],
     )
     body = BODY.format(source=source, step="" if step is None else f" (training step {step:,})")
+    if other_sizes:
+        sizes = ", ".join(f"`{k}={v}`" for k, v in other_sizes.items())
+        body += f"\nThis checkpoint's network is the released architecture at other sizes: {sizes}.\n"
     return str(ModelCard(f"---\n{data.to_yaml()}\n---\n{body}"))
