@@ -23,7 +23,13 @@ from huggingface_hub.errors import HfHubHTTPError
 
 from lerobot_policy_language_table.architecture import entry, network_sizes, resnet_stage_sizes
 from lerobot_policy_language_table.configuration_language_table import ACTION_KEY, LanguageTableConfig
-from lerobot_policy_language_table.flax_checkpoint import DAMAGED, CheckpointError, flat_weights, read_checkpoint
+from lerobot_policy_language_table.flax_checkpoint import (
+    DAMAGED,
+    CheckpointError,
+    describe,
+    flat_weights,
+    read_checkpoint,
+)
 from lerobot_policy_language_table.model_card import model_card
 from lerobot_policy_language_table.modeling_language_table import LanguageTablePolicy
 from lerobot_policy_language_table.param_map import UNUSED_PREFIX, to_torch_layout, torch_key, unused_resnet_shapes
@@ -84,7 +90,7 @@ def _statistic(stats: dict[str, Any], name: str) -> np.ndarray:
     try:
         array = np.array(value, dtype=np.float32)
     except (TypeError, ValueError) as err:
-        raise CheckpointError(f"{path} is {value!r:.40}, not 2 numbers: {DAMAGED}") from err
+        raise CheckpointError(f"{path} is {describe(value)}, not 2 numbers: {DAMAGED}") from err
     if array.shape != (2,) or not np.isfinite(array).all():
         raise CheckpointError(f"{path} must hold 2 finite numbers (one per action axis), got {value!r:.60}")
     return array
@@ -100,7 +106,7 @@ def action_statistics(checkpoint: dict[str, Any]) -> dict[str, torch.Tensor]:
 def _step(checkpoint: dict[str, Any]) -> int | None:
     step = checkpoint.get("step")
     if step is not None and (isinstance(step, bool) or not isinstance(step, int | np.integer)):
-        raise CheckpointError(f"the checkpoint's step is {step!r:.40}, not an integer: {DAMAGED}")
+        raise CheckpointError(f"the checkpoint's step is {describe(step)}, not an integer: {DAMAGED}")
     return None if step is None else int(step)
 
 

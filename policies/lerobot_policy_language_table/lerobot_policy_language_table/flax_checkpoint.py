@@ -89,16 +89,21 @@ def read_checkpoint(path: str | Path) -> dict[str, Any]:
     except CheckpointError:
         raise
     except ValueError as err:  # msgpack's unpack errors (truncated data, bad format) are ValueErrors
-        raise CheckpointError(f"{path} is not a Flax msgpack checkpoint ({err})") from err
+        reason = str(err) or type(err).__name__  # msgpack's StackError (nested too deep) has no message
+        raise CheckpointError(f"{path} is not a Flax msgpack checkpoint ({reason}): is the file complete?") from err
     if not isinstance(state, dict):
         raise CheckpointError(f"{path} is not a Flax checkpoint: it holds a {type(state).__name__}, not a state dict")
     return state
 
 
+def describe(value: Any) -> str:
+    """A short description of a checkpoint value for an error line: 'the str 'abc'', 'an undecodable value (...)'."""
+    return repr(value) if isinstance(value, Undecodable) else f"the {type(value).__name__} {value!r:.30}"
+
+
 def _weights(path: str, value: Any) -> np.ndarray:
     if not isinstance(value, np.ndarray):
-        found = value if isinstance(value, Undecodable) else f"the {type(value).__name__} {value!r:.20}"
-        raise CheckpointError(f"{path} is {found}, not an array of weights: {DAMAGED}")
+        raise CheckpointError(f"{path} is {describe(value)}, not an array of weights: {DAMAGED}")
     if value.dtype.kind != "f":
         raise CheckpointError(f"{path} holds {value.dtype} values, not floating-point weights: {DAMAGED}")
     bad = value.size - int(np.count_nonzero(np.isfinite(value)))
