@@ -1,5 +1,4 @@
-"""Build a run's parts from its config: the robot, the policy, the operator console, the episode observers
-and the runner that drives them."""
+"""Build a run's parts from its config: the robot, the operator console and the episode observers."""
 
 from __future__ import annotations
 
@@ -10,10 +9,11 @@ from pathlib import Path
 from typing import Any
 
 from lerobot_contrast.config import ConfigError, EvalConfig
-from lerobot_contrast.contrast.strategy import PlannedTrial
+from lerobot_contrast.contrast.staging import reports_scene
+from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.operator_console import Answers, OperatorConsole
-from lerobot_contrast.runners.episode import EpisodeObserver, reports_scene
-from lerobot_contrast.runners.robot import RobotRunner
+from lerobot_contrast.policies import policy_entry
+from lerobot_contrast.record.observer import EpisodeObserver
 
 # The robot each task runs on when no --robot is given: a simulator, or the LoCoBot host's sim backend.
 TASK_ROBOTS = {"language_table": "language_table_sim", "vln": "locobot"}
@@ -26,7 +26,7 @@ def register_robots() -> dict[str, str]:
     package's simulated robots. Returns the built-in packages that could not be imported here, with why."""
     from lerobot.utils.import_utils import register_third_party_plugins
 
-    import lerobot_contrast.sims.language_table.config_language_table_sim  # noqa: F401
+    import lerobot_contrast.domains.language_table.config_language_table_sim  # noqa: F401
 
     unavailable = {}
     for family in ("lerobot.robots", "lerobot.cameras"):
@@ -57,7 +57,7 @@ def check_robot_type(argv: list[str], unavailable: dict[str, str]) -> None:
 
 def needs_camera(cfg: EvalConfig) -> bool:
     """Scripted policies read the scene, not images: render only for a learned policy or a recording."""
-    return cfg.policy.kind == "lerobot" or cfg.rerun or cfg.record_dataset
+    return policy_entry(cfg.policy).reads_images or cfg.rerun or cfg.record_dataset
 
 
 def choose_robot(cfg: EvalConfig) -> None:
@@ -84,49 +84,6 @@ def make_robot(cfg: EvalConfig) -> Any:
         ) from None
 
 
-def make_policy(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]) -> Any:
-    kind = cfg.policy.kind
-    if kind == "lerobot":
-        from lerobot_contrast.pretrained_policy import PretrainedPolicy
-
-        return PretrainedPolicy(
-            robot, cfg.policy.path, cfg.policy.type, cfg.policy.device, cfg.rename_map, cfg.policy.use_amp
-        )
-    if kind == "route_follower":
-        return _route_follower(cfg, robot, task)
-    return _tabletop_policy(cfg, robot, task, plan)
-
-
-def _route_follower(cfg: EvalConfig, robot: Any, task: Any) -> Any:
-    from lerobot_contrast.tasks.vln import VLNTask
-    from lerobot_contrast.tasks.vln.policy import RouteFollower
-
-    if not isinstance(task, VLNTask) or not hasattr(robot.config, "forward_m"):
-        raise ConfigError("--policy.type=route_follower navigates --task=vln on --robot.type=locobot only")
-    return RouteFollower(robot.config.forward_m, robot.config.turn_deg, cfg.policy.language_blind)
-
-
-def _tabletop_policy(cfg: EvalConfig, robot: Any, task: Any, plan: list[PlannedTrial]) -> Any:
-    from lerobot_contrast.policies import OraclePolicy, RandomPolicy
-    from lerobot_contrast.tasks.language_table import LanguageTableTask
-    from lerobot_contrast.tasks.language_table.board import MAX_ACTION
-
-    kind = cfg.policy.kind
-    if set(robot.action_features) != {"delta_x", "delta_y"}:
-        raise ConfigError(
-            f"--policy.type={kind} drives the simulated tabletop only; give --policy.path for {robot.name}"
-        )
-    if kind == "random":
-        return RandomPolicy(list(robot.action_features), MAX_ACTION)
-    if not (isinstance(task, LanguageTableTask) and reports_scene(robot)):
-        raise ConfigError(
-            "--policy.type=oracle solves Language-Table instructions in simulation only; "
-            "use --policy.type=random or --policy.path"
-        )
-    bases = {trial.base.id: trial.base for trial in plan}
-    return OraclePolicy(robot.read_scene, task, bases, cfg.policy.noise_std, cfg.policy.language_blind)
-
-
 def make_observers(cfg: EvalConfig, task: Any, robot: Any, run_dir: Path) -> list[EpisodeObserver]:
     observers: list[EpisodeObserver] = []
     if cfg.rerun:
@@ -141,9 +98,8 @@ def make_observers(cfg: EvalConfig, task: Any, robot: Any, run_dir: Path) -> lis
     return observers
 
 
-def make_runner(
-    cfg: EvalConfig, robot: Any, task: Any, policy: Any, unit: str, observers: list[EpisodeObserver]
-) -> RobotRunner:
+def make_operator(cfg: EvalConfig, robot: Any, task: Task, unit: str) -> OperatorConsole | None:
+    """The operator console that stages and labels each trial, or None where the robot does it (--operator=auto)."""
     scene_io = reports_scene(robot, task.storage_scene().objects)
     mode = cfg.operator or ("auto" if scene_io else "console")
     if mode not in OPERATORS:
@@ -153,18 +109,11 @@ def make_runner(
             f"--operator=auto needs a robot that reports and stages this task's scene; {robot.name} cannot, "
             "so use --operator=console"
         )
-    operator = OperatorConsole(Answers(sys.stdin), unit=unit) if mode == "console" else None
-    # Simulated robots step as fast as they can unless asked for a rate; hardware runs at a fixed one.
-    fps = cfg.fps if cfg.fps is not None else (None if getattr(robot, "simulated", False) else DEFAULT_HARDWARE_FPS)
-    return RobotRunner(
-        robot,
-        policy,
-        task,
-        operator=operator,
-        fps=fps,
-        max_steps=cfg.max_episode_steps,
-        max_episode_s=cfg.max_episode_s,
-        observers=observers,
-        cost_unit=unit,
-        scene_io=scene_io,
-    )
+    return OperatorConsole(Answers(sys.stdin), unit=unit) if mode == "console" else None
+
+
+def run_fps(cfg: EvalConfig, robot: Any) -> float | None:
+    """Simulated robots step as fast as they can unless asked for a rate; hardware runs at a fixed one."""
+    if cfg.fps is not None:
+        return cfg.fps
+    return None if getattr(robot, "simulated", False) else DEFAULT_HARDWARE_FPS

@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-import re
-import sys
-import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -14,39 +10,7 @@ import draccus
 from lerobot.robots import RobotConfig
 
 from lerobot_contrast.contrast.errors import UserError
-
-# The scripted baselines; any other --policy.type is a LeRobot policy type (act, diffusion, smolvla, ...).
-SCRIPTED_POLICIES = ("oracle", "random", "route_follower")
-
-
-@dataclass
-class PolicyArgs:
-    # A LeRobot policy to load: a directory written by save_pretrained, or a Hub repo id.
-    path: str | None = None
-    # Without --policy.path: `oracle` (scripted push oracle with privileged state), `random`, `route_follower`
-    # (scripted VLN navigator), or a LeRobot policy type built fresh with random weights from the robot's features
-    # (for smoke tests).
-    type: str | None = None
-    # Torch device for a LeRobot policy (cpu, cuda, mps); default: the policy config's own.
-    device: str | None = None
-    # Automatic mixed precision for a LeRobot policy on CUDA.
-    use_amp: bool = False
-    # Gaussian noise added to each oracle action, in metres (0 = none).
-    noise_std: float = 0.0
-    # Probability per episode that the oracle ignores a perturbed instruction's words and executes
-    # its base instruction instead (0 = reads every instruction).
-    language_blind: float = 0.0
-
-    @property
-    def kind(self) -> str:
-        """oracle | random | route_follower | lerobot"""
-        if self.path is None and self.type in (None, *SCRIPTED_POLICIES):
-            return self.type or "oracle"
-        return "lerobot"
-
-    @property
-    def label(self) -> str:
-        return self.path or self.type or "oracle"
+from lerobot_contrast.policies.base import PolicyArgs
 
 
 @dataclass
@@ -118,67 +82,6 @@ class EvalConfig:
 
 class ConfigError(UserError):
     pass
-
-
-def _flag_types(cls: type, prefix: str = "") -> dict[str, Any]:
-    """Every flag of `cls` (nested dataclasses as dotted names) with its type."""
-    types: dict[str, Any] = {}
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        name = prefix + f.name
-        types[name] = hints[f.name]
-        default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
-        if dataclasses.is_dataclass(default):
-            types |= _flag_types(type(default), name + ".")
-    return types
-
-
-def _is_list(tp: Any) -> bool:
-    return typing.get_origin(tp) is list or any(typing.get_origin(a) is list for a in typing.get_args(tp))
-
-
-def _bracket_lists(arg: str, types: dict[str, Any]) -> str:
-    """Accept a bare comma list for a list flag: --perturbations=LB1,LB2 means --perturbations=[LB1,LB2]."""
-    name, _, value = arg.lstrip("-").partition("=")
-    if name in types and _is_list(types[name]) and value and not value.startswith("["):
-        return f"--{name}=[{value}]"
-    return arg
-
-
-def _value_error(message: str) -> str:
-    """draccus's "`robot`: ...: `camera`: Couldn't parse 'x' into a bool" as "--robot.camera: couldn't parse ..."."""
-    fields = re.findall(r"`([\w.]+)`: ", message)
-    if not fields:
-        return f"invalid flag value: {message}; see --help"
-    detail = message.rsplit("`: ", 1)[1]
-    typed = re.search(r"value=(.*?) into field .* of type (.*?)\. Underlying", detail)
-    if typed is not None:  # a dict or other structured value
-        detail = f"could not read {typed.group(1)} as {typed.group(2)}"
-    elif "Couldn't parse" in detail:
-        detail = detail.rsplit(": ", 1)[-1]
-    return f"--{'.'.join(fields)}: {detail[0].lower()}{detail[1:]}; see --help for the value it takes"
-
-
-def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
-    """Parse LeRobot-style `--name=value` flags, turning any mistake into a one-line ConfigError."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    types = _flag_types(cls)
-    known = set(types) | {"config_path", "help", "h"}
-    for arg in argv:
-        if not arg.startswith("-"):
-            raise ConfigError(f"unexpected argument {arg!r}; flags look like --name=value (see --help)")
-        name = arg.lstrip("-").split("=", 1)[0]
-        if name not in known and not name.startswith("robot."):  # robot fields depend on --robot.type
-            raise ConfigError(f"unknown flag --{name}; see --help for the flags this command takes")
-        if "=" not in arg and name not in ("help", "h"):
-            raise ConfigError(f"--{name} needs a value, e.g. --{name}=true; flags look like --name=value")
-    argv = [_bracket_lists(arg, types) for arg in argv]
-    try:
-        return draccus.parse(config_class=cls, args=argv)
-    except SystemExit:
-        raise
-    except Exception as error:  # draccus reports bad values with multi-line messages
-        raise ConfigError(_value_error(" ".join(str(error).split()))) from None
 
 
 def resume_args(argv: list[str]) -> list[str]:

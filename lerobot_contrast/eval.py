@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from datetime import datetime
@@ -13,26 +14,25 @@ import numpy as np
 from lerobot_contrast.build import (
     check_robot_type,
     make_observers,
-    make_policy,
+    make_operator,
     make_robot,
-    make_runner,
     register_robots,
+    run_fps,
 )
-from lerobot_contrast.config import ConfigError, EvalConfig, config_json, parse_config, resume_args
-from lerobot_contrast.console import plan_lines, trial_line
+from lerobot_contrast.config import ConfigError, EvalConfig, config_json, resume_args
+from lerobot_contrast.console import plan_lines
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
-from lerobot_contrast.contrast.task import cost_model as task_cost_model
-from lerobot_contrast.evaluate import LoopState, assume_unchanged, check_budget, run_trials
+from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.domains import load_task
+from lerobot_contrast.evaluation import Evaluation, check_budget, preview, run
+from lerobot_contrast.flags import help_text, join_values, parse_config, robot_type, wants_help
 from lerobot_contrast.operator_console import SessionStopped
-from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan, write_plan
-from lerobot_contrast.record.results import write_results
-from lerobot_contrast.record.run_dir import RunDir, open_run_dir
-from lerobot_contrast.record.summary import format_summary, summarize
-from lerobot_contrast.runners.robot import RobotLostError
-from lerobot_contrast.tasks import make_task
-
-DEFAULT_INSTANCES = 50
+from lerobot_contrast.policies import make_policy
+from lerobot_contrast.record.journal import read_journal
+from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
+from lerobot_contrast.record.summary import format_summary
+from lerobot_contrast.runner import RobotLostError
 
 
 def validate(cfg: EvalConfig) -> None:
@@ -48,29 +48,28 @@ def validate(cfg: EvalConfig) -> None:
         raise ConfigError(f"--perturbations only applies to --strategy=contrast, not {cfg.strategy!r}")
 
 
-def build_plan(cfg: EvalConfig) -> tuple[Any, list[PlannedTrial]]:
+def build_plan(cfg: EvalConfig) -> tuple[Task, list[PlannedTrial]]:
     """The task and the ordered trials; depends only on the config, so a resumed run rebuilds the same plan."""
-    task = make_task(cfg.task, families=cfg.families)
+    task = load_task(cfg.task, families=cfg.families)
     perturbations = task.perturbations.select(cfg.perturbations) if cfg.strategy == "contrast" else []
     rng = np.random.default_rng(cfg.seed)
-    instances = task.sample(cfg.n_instances or getattr(task, "default_instances", DEFAULT_INSTANCES), rng)
+    instances = task.sample(cfg.n_instances or task.default_instances, rng)
     return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order)
 
 
-def default_output_dir(cfg: EvalConfig, task: Any) -> Path:
+def default_output_dir(cfg: EvalConfig, task: Task) -> Path:
     now = datetime.now()
     return Path("outputs/contrast") / now.strftime("%Y-%m-%d") / f"{now:%H-%M-%S}_{task.name}_{cfg.strategy}"
 
 
-def dry_run(cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any) -> None:
-    initial = task.storage_scene()
-    records = list(run_trials(plan, task, cost_model, cfg.budget, cfg.seed, LoopState(initial), assume_unchanged))
-    print("\n".join(plan_lines(records, initial, cost_model.unit)))
+def dry_run(evaluation: Evaluation) -> None:
+    records, unit = preview(evaluation), evaluation.cost_model.unit
+    print("\n".join(plan_lines(records, evaluation.task.storage_scene(), unit)))
     done = [r for r in records if r.status == "done"]
     total = done[-1].cumulative_cost if done else 0.0
     print(
-        f"plan: {len(done)} trials ({len(records) - len(done)} not applicable) of {len(plan)} planned, "
-        f"planned cost {total:.2f} {cost_model.unit} (assuming the robot leaves every scene as staged)"
+        f"plan: {len(done)} trials ({len(records) - len(done)} not applicable) of {len(evaluation.plan)} planned, "
+        f"planned cost {total:.2f} {unit} (assuming the robot leaves every scene as staged)"
     )
 
 
@@ -87,44 +86,6 @@ def adopt_plan(cfg: EvalConfig) -> Path:
         if key in published:
             setattr(cfg, key, published[key])
     return source
-
-
-def run(
-    cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any, policy: Any
-) -> dict[str, Any]:
-    observers = make_observers(cfg, task, robot, run_dir.path)
-    execute = make_runner(cfg, robot, task, policy, cost_model.unit, observers)
-    write_plan(run_dir.path, plan)
-    records = run_dir.journal.records
-    state = LoopState.resume(records, task.storage_scene())
-    if records:
-        print(
-            f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {cost_model.unit} spent)"
-        )
-    settings = {
-        "task": task.name,
-        "strategy": cfg.strategy,
-        "policy": cfg.policy.label,
-        "robot": robot.name,
-        "seed": cfg.seed,
-        "cost_unit": cost_model.unit,
-        "budget": cfg.budget,
-        "planned_trials": len(plan),
-    }
-    complete = False
-    try:
-        for record in run_trials(plan, task, cost_model, cfg.budget, cfg.seed, state, execute, settings):
-            run_dir.journal.append(record)
-            print(trial_line(record, cost_model.unit), flush=True)
-        complete = True
-    finally:
-        summary = summarize(run_dir.journal.records, settings=settings, complete=complete)
-        metadata = {k: str(v) for k, v in settings.items()}
-        write_results(run_dir.results_path, run_dir.journal.records, metadata)
-        run_dir.write_summary(summary)
-        for observer in observers:
-            observer.close()
-    return summary
 
 
 def connect(robot: Any) -> None:
@@ -144,60 +105,78 @@ def evaluate(cfg: EvalConfig) -> int:
     task, plan = build_plan(cfg)
     if source is not None:
         check_same_plan(source, plan)
-    cost_model = task_cost_model(task, cfg.cost)
-    check_budget(plan, task, cost_model, cfg.budget, cfg.seed, task.storage_scene())
+    planned = Evaluation(task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed)
+    check_budget(planned)
     if cfg.dry_run:
-        dry_run(cfg, task, plan, cost_model)
+        dry_run(planned)
         return 0
     robot = make_robot(cfg)
     # Connect before creating the run directory: an unreachable robot leaves nothing behind to resume.
     # A remote robot also says on connecting whether it can stage scenes.
     connect(robot)
     try:
-        policy = make_policy(cfg, robot, task, plan)  # a policy that cannot load leaves no run directory either
+        operator = make_operator(cfg, robot, task, planned.cost_model.unit)
+        policy = make_policy(cfg.policy, robot, task, cfg.rename_map)  # one that cannot load leaves no run directory
         cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
-        run_dir = open_run_dir(cfg.output_dir, config_json(cfg), cfg.resume)
-        return run_and_report(cfg, task, plan, cost_model, run_dir, robot, policy)
+        evaluation = dataclasses.replace(
+            planned,
+            policy=policy,
+            robot=robot,
+            observers=make_observers(cfg, task, robot, cfg.output_dir),
+            operator=operator,
+            fps=run_fps(cfg, robot),
+            max_steps=cfg.max_episode_steps,
+            max_episode_s=cfg.max_episode_s,
+            output_dir=cfg.output_dir,
+            resume=cfg.resume,
+            config=config_json(cfg),
+            labels={"strategy": cfg.strategy, "policy": cfg.policy.label},
+            verbose=True,
+        )
+        return run_and_report(cfg, evaluation)
     finally:
         if robot.is_connected:
             robot.disconnect()
 
 
-def run_and_report(
-    cfg: EvalConfig, task: Any, plan: list[PlannedTrial], cost_model: Any, run_dir: RunDir, robot: Any, policy: Any
-) -> int:
-    resume = f"--output_dir={run_dir.path} --resume=true"
+def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
+    path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
+    resume = f"--output_dir={path} --resume=true"
     try:
-        summary = run(cfg, task, plan, cost_model, run_dir, robot, policy)
+        results = run(evaluation)
     except KeyboardInterrupt:
         print(
-            f"\ninterrupted: every finished trial is in {run_dir.journal.path}; continue with {resume}", file=sys.stderr
+            f"\ninterrupted: every finished trial is in {path / 'journal.jsonl'}; continue with {resume}",
+            file=sys.stderr,
         )
         return 130
     except SessionStopped as stop:
-        print(f"stopped: {stop}; {len(run_dir.journal.records)} trials recorded; continue with {resume}")
+        print(f"stopped: {stop}; {len(read_journal(path / 'journal.jsonl'))} trials recorded; continue with {resume}")
         return 0
     except RobotLostError as error:
         print(f"error: {error} with {resume}", file=sys.stderr)
         return 2
-    print(format_summary(summary, cost_model.unit))
-    spent, ran = summary["overall"]["cumulative_cost"], len(run_dir.journal.records)
+    print(format_summary(results.summary, unit))
+    spent, ran = results.summary["overall"]["cumulative_cost"], len(results.records)
     if cfg.budget is not None and spent > cfg.budget:
         print(
-            f"stopped at the budget: {spent:.2f} of {cfg.budget:g} {cost_model.unit} spent, {ran} of {len(plan)} planned trials reached"
+            f"stopped at the budget: {spent:.2f} of {cfg.budget:g} {unit} spent, {ran} of {len(evaluation.plan)} planned trials reached"
         )
-    print(f"run directory: {run_dir.path}")
+    print(f"run directory: {path}")
     if cfg.push_to_hub:
         from lerobot_contrast.record.hub import publish_run
 
-        print(f"published: {publish_run(run_dir.path, cfg.repo_id, private=cfg.private)}")
+        print(f"published: {publish_run(path, cfg.repo_id, private=cfg.private)}")
     return 0
 
 
 def main(argv: list[str] | None = None) -> int:
     try:
-        argv = list(sys.argv[1:] if argv is None else argv)
+        argv = join_values(list(sys.argv[1:] if argv is None else argv))
         check_robot_type(argv, register_robots())
+        if wants_help(argv):
+            print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv)))
+            return 0
         return evaluate(parse_config(EvalConfig, resume_args(argv)))
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)

@@ -18,7 +18,7 @@ from rich.table import Table
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.task import Judgement
-from lerobot_contrast.runners.episode import TrialContext
+from lerobot_contrast.contrast.trial import TrialContext
 
 # In-trial keys (a letter, then Enter): end the episode as a success or a failure, or stop the robot now.
 TRIAL_KEYS = {"s": "success", "f": "failure", "e": "estop"}

@@ -17,12 +17,13 @@ from pathlib import Path
 
 import numpy as np
 
-from lerobot_contrast.pretrained_policy import PretrainedPolicy, save_fresh_policy
-from lerobot_contrast.runners.episode import QuietObserver, TrialContext
-from lerobot_contrast.runners.robot import RobotRunner
-from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
-from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim
-from lerobot_contrast.tasks.language_table import LanguageTableTask
+from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.domains.language_table import LanguageTableTask
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
+from lerobot_contrast.policies.pretrained import PretrainedPolicy, save_fresh_policy
+from lerobot_contrast.record.observer import QuietObserver
+from lerobot_contrast.runner import RobotRunner
 
 SMALL_ACT = {
     "dim_model": 128,

@@ -28,14 +28,14 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from lerobot_contrast.contrast.trial import Outcome  # noqa: E402
-from lerobot_contrast.policies import OraclePolicy  # noqa: E402
+from lerobot_contrast.contrast.trial import Outcome, TrialContext  # noqa: E402
+from lerobot_contrast.domains.language_table import LanguageTableTask  # noqa: E402
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig  # noqa: E402
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim, episode_features  # noqa: E402
+from lerobot_contrast.policies.oracle import OraclePolicy  # noqa: E402
 from lerobot_contrast.record.dataset import DatasetRecorder  # noqa: E402
+from lerobot_contrast.record.observer import QuietObserver  # noqa: E402
 from lerobot_contrast.record.rerun_log import RerunEpisodeRecorder  # noqa: E402
-from lerobot_contrast.runners.episode import QuietObserver, TrialContext  # noqa: E402
-from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig  # noqa: E402
-from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim, episode_features  # noqa: E402
-from lerobot_contrast.tasks.language_table import LanguageTableTask  # noqa: E402
 
 PERIOD_S = 0.1  # Language-Table's 10 Hz control
 FEATURES = episode_features()
@@ -73,7 +73,7 @@ def run_episode(
 ) -> None:
     """One paced episode: every step starts on its 10 Hz tick; only the loop thread's work is timed."""
     robot.stage_scene(trial.instance.scene)
-    policy = OraclePolicy(robot.read_scene, task, {trial.instance.id: trial.instance})
+    policy = OraclePolicy(robot.read_scene, task)
     policy.reset(trial)
     start = time.perf_counter()
     observer.start(trial, FEATURES, POSE_KEYS)

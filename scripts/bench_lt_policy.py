@@ -54,7 +54,7 @@ def measure(policy_dir: str, steps: int, threads: int) -> dict:
     from lerobot.policies.utils import prepare_observation_for_inference
     from lerobot_policy_language_table import LanguageTablePolicy
 
-    import lerobot_contrast.sims  # noqa: F401  (registers the env id)
+    import lerobot_contrast.domains.language_table.env  # noqa: F401  (registers the env id)
 
     torch.set_num_threads(threads)
     before_mb = _rss_mb()

@@ -26,10 +26,10 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from lerobot_contrast.contrast.instance import Instance  # noqa: E402
+from lerobot_contrast.domains.language_table import LanguageTableTask  # noqa: E402
+from lerobot_contrast.domains.language_table.env import LanguageTableEnv  # noqa: E402
+from lerobot_contrast.domains.language_table.oracle import PushOracle  # noqa: E402
 from lerobot_contrast.eval import main as eval_main  # noqa: E402
-from lerobot_contrast.sims.language_table.env import LanguageTableEnv  # noqa: E402
-from lerobot_contrast.sims.language_table.oracle import PushOracle  # noqa: E402
-from lerobot_contrast.tasks.language_table import LanguageTableTask  # noqa: E402
 
 # The benchmark's pybullet env takes ~46 ms per step on one core, render dominated (spec section 1.3).
 PYBULLET_STEPS_PER_S = 21.7

@@ -3,9 +3,9 @@
 import json
 from pathlib import Path
 
-from lerobot_contrast.pretrained_policy import save_fresh_policy
-from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
-from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
+from lerobot_contrast.policies.pretrained import save_fresh_policy
 
 # A small ACT: short chunks so the model runs every few steps, and quick on a CPU.
 SMALL_ACT = {

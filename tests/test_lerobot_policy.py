@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.instance import Instance
+from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.domains.language_table import LanguageTableTask
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
 from lerobot_contrast.eval import main
-from lerobot_contrast.pretrained_policy import PolicyLoadError, PretrainedPolicy
-from lerobot_contrast.runners.episode import QuietObserver, TrialContext
-from lerobot_contrast.runners.robot import RobotRunner
-from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
-from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim
-from lerobot_contrast.tasks.language_table import LanguageTableTask
+from lerobot_contrast.policies.pretrained import PolicyLoadError, PretrainedPolicy
+from lerobot_contrast.record.observer import QuietObserver
+from lerobot_contrast.runner import RobotRunner
 from tests.lerobot_helpers import save_act
 
 RUN = ["--n_instances=2", "--seed=1", "--perturbations=[L,SB2]", "--max_episode_steps=12"]

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from lerobot.robots import RobotConfig
 
-from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
 
 
 @RobotConfig.register_subclass("flaky_tabletop")
@@ -26,7 +26,7 @@ class FlakyTabletopConfig(LanguageTableSimConfig):
     can_reconnect: bool = True
 """
 ROBOT = '''
-from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
 
 from .config_flaky_tabletop import FlakyTabletopConfig
 

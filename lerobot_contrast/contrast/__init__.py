@@ -4,11 +4,11 @@ from lerobot_contrast.contrast.cost import CostModel, DistanceCost, ResetTimeCos
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.metrics import spl, subgoal_progress
-from lerobot_contrast.contrast.perturbation import AXES, Perturbation, PerturbationRegistry, perturb
+from lerobot_contrast.contrast.perturbation import AXES, Perturbation, PerturbationRegistry
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import materialize, staging_moves
 from lerobot_contrast.contrast.strategy import STRATEGIES, PlannedTrial, make_plan
-from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.contrast.task import Judgement, Task, perturb
 from lerobot_contrast.contrast.trial import Outcome, TrialRecord
 
 __all__ = [
@@ -17,6 +17,7 @@ __all__ = [
     "CostModel",
     "DistanceCost",
     "Instance",
+    "Judgement",
     "Outcome",
     "Perturbation",
     "PerturbationRegistry",

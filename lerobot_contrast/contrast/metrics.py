@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from lerobot_contrast.contrast.trial import Outcome
+
 
 def spl(success: bool, reference_length: float, path_length: float) -> float:
     """Success weighted by path length: S * l / max(l, p) for reference l and actual p (Anderson et al. 2018)."""
@@ -20,3 +22,14 @@ def subgoal_progress(subgoals_reached: int, n_subgoals: int) -> float:
 
 
 METRICS = ("success", "spl", "progress")
+
+
+def score(outcome: Outcome) -> dict[str, bool | float | None]:
+    """The one place an outcome becomes metrics: success, SPL (None without a reference path) and progress
+    (success itself where the task has no subgoals)."""
+    reference = outcome.reference_length
+    return {
+        "success": outcome.success,
+        "spl": None if reference is None else spl(outcome.success, reference, outcome.path_length),
+        "progress": outcome.progress if outcome.progress is not None else float(outcome.success),
+    }

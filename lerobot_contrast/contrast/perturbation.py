@@ -4,15 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.instance import Instance
-
-if TYPE_CHECKING:
-    from lerobot_contrast.contrast.task import Task
 
 Axis = Literal["L", "LB", "S", "SB"]
 AXES: tuple[Axis, ...] = ("L", "LB", "S", "SB")
@@ -97,25 +94,3 @@ class PerturbationRegistry:
 
     def __len__(self) -> int:
         return len(self._items)
-
-
-def perturb(task: Task, perturbation: Perturbation, instance: Instance, rng: np.random.Generator) -> Instance | None:
-    """Apply `perturbation` to `instance` (set in the current scene) and check the result is a valid test.
-
-    Returns None when the perturbation does not apply, when the task cannot ground the result in
-    its scene (a target off the board, a missing object), or when the expected behaviour is
-    already achieved there (a trial the robot would pass by doing nothing).
-    """
-    out = perturbation.apply(instance, rng)
-    if out is None:
-        return None
-    if perturbation.axis in ("L", "LB") and out.scene != instance.scene:
-        raise ValueError(f"language perturbation {perturbation.name!r} changed the scene")
-    out = task.rebase(out, out.scene)
-    if out is None or task.is_achieved(out, out.scene):
-        return None
-    return out.derive(
-        id=f"{instance.base_id}/{perturbation.name}",
-        base_id=instance.base_id,
-        perturbation=perturbation.name,
-    )

@@ -6,16 +6,10 @@ plus 2-opt on the cost of staging one base scene from another.
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from lerobot_contrast.contrast.cost import CostModel, DistanceCost
 from lerobot_contrast.contrast.instance import Instance
-
-if TYPE_CHECKING:  # strategy.py imports this module to offer the order
-    from lerobot_contrast.contrast.strategy import PlannedTrial
 
 
 def cost_matrix(bases: list[Instance], cost: CostModel) -> np.ndarray:
@@ -77,16 +71,3 @@ def cost_aware_order(bases: list[Instance], cost: CostModel | None = None) -> np
         return np.arange(len(bases))
     m = cost_matrix(bases, cost or DistanceCost())
     return two_opt(m, nearest_neighbour(m, start=0))
-
-
-def reorder_plan(plan: list[PlannedTrial], cost: CostModel | None = None) -> list[PlannedTrial]:
-    """The same trials, with each base's chain kept together and the chains in cost-aware order.
-
-    Deterministic: the order depends only on the plan (itself seeded), and ties go to the earlier base.
-    """
-    chains: dict[str, list[PlannedTrial]] = {}
-    for trial in plan:
-        chains.setdefault(trial.base.id, []).append(trial)
-    firsts = [chain[0].base for chain in chains.values()]
-    ordered = [trial for k in cost_aware_order(firsts, cost) for trial in chains[firsts[k].id]]
-    return [replace(trial, index=index) for index, trial in enumerate(ordered)]

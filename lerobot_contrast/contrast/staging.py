@@ -1,17 +1,19 @@
-"""Staging: the concrete instance a planned trial runs, given the scene the robot left behind."""
+"""Staging: the concrete instance a planned trial runs, given the scene the robot left behind, what the operator
+moves to set it up, and the robots that can read and stage a scene themselves."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from lerobot_contrast.contrast.cost import moved_objects
 from lerobot_contrast.contrast.instance import Instance
-from lerobot_contrast.contrast.perturbation import perturb
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.strategy import PlannedTrial
-from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.contrast.task import Task, perturb
 
 
 @dataclass(frozen=True)
@@ -64,3 +66,25 @@ def staging_moves(current: Scene, target: Scene, tolerance: float = 0.005) -> li
         for name, distance in moved_objects(current, target, tolerance).items()
     ]
     return sorted(moves, key=lambda m: -m.distance)
+
+
+@runtime_checkable
+class SceneIO(Protocol):
+    """A robot (simulated, or with a perception stack) that can report and set its scene.
+
+    The runner then stages scenes and judges predicates without asking the operator."""
+
+    def read_scene(self) -> Scene: ...
+
+    def stage_scene(self, scene: Scene) -> None: ...
+
+
+def reports_scene(robot: Any, objects: Iterable[str] = ()) -> bool:
+    """Whether `robot` can read and stage a scene of `objects` now.
+
+    A remote host may report that it cannot (`supports_scene_io`); a simulator places only the objects
+    it models (`stageable_objects`)."""
+    if not (isinstance(robot, SceneIO) and getattr(robot, "supports_scene_io", True)):
+        return False
+    stageable = getattr(robot, "stageable_objects", None)
+    return stageable is None or set(objects) <= set(stageable)

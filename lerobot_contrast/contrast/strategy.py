@@ -7,15 +7,16 @@ perturbations act on the scene the robot left behind (see `staging.materialize`)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
 
+from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import Perturbation
-from lerobot_contrast.contrast.schedule import reorder_plan
+from lerobot_contrast.contrast.schedule import cost_aware_order
 
 # reset: stage the instance's own scene. in_place: perturb the scene the robot left behind.
 # in_place_or_reset: give the instruction in the current scene, resetting only where it is infeasible.
@@ -104,6 +105,19 @@ def make_plan(
         raise UserError(f"--order: unknown order {order!r}; choose from: {', '.join(ORDERS)}")
     plan = planner(instances, perturbations, repeats, rng)
     return reorder_plan(plan) if order == "cost_aware" else plan
+
+
+def reorder_plan(plan: list[PlannedTrial], cost: CostModel | None = None) -> list[PlannedTrial]:
+    """The same trials, with each base's chain kept together and the chains in cost-aware order.
+
+    Deterministic: the order depends only on the plan (itself seeded), and ties go to the earlier base.
+    """
+    chains: dict[str, list[PlannedTrial]] = {}
+    for trial in plan:
+        chains.setdefault(trial.base.id, []).append(trial)
+    firsts = [chain[0].base for chain in chains.values()]
+    ordered = [trial for k in cost_aware_order(firsts, cost) for trial in chains[firsts[k].id]]
+    return [replace(trial, index=index) for index, trial in enumerate(ordered)]
 
 
 def exceeds_budget(cumulative_cost: float, budget: float | None) -> bool:

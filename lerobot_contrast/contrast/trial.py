@@ -6,10 +6,28 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any, Literal
 
+import numpy as np
+
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Scene
 
 Status = Literal["done", "not_applicable", "aborted", "skipped"]
+
+
+@dataclass(frozen=True)
+class TrialContext:
+    """Everything a runner and its observers know about a trial before it runs."""
+
+    index: int
+    instance: Instance
+    base: Instance  # the i.i.d. instance this trial derives from (the instance itself for an original)
+    current: Scene  # the scene the robot left behind; the operator stages `instance.scene` from it
+    planned_cost: float
+    staging: str  # "reset" | "in_place"
+    rng: np.random.Generator
+    planned_trials: int
+    axis: str | None = None  # L | LB | S | SB, None for an original
+    settings: dict[str, Any] = field(default_factory=dict)  # strategy, policy, task: for recording properties
 
 
 @dataclass(frozen=True)

@@ -56,9 +56,9 @@ def _perturbations(config: dict[str, Any], names: list[str]) -> list[str]:
     """One line per perturbation the run applied, with its axis and description from the task when known."""
     described: dict[str, tuple[str, str]] = {}
     try:
-        from lerobot_contrast.tasks import make_task
+        from lerobot_contrast.domains import load_task
 
-        task = make_task(config.get("task", ""))
+        task = load_task(config.get("task", ""))
         described = {p.name: (p.axis, p.description) for p in task.perturbations}
     except (UserError, ImportError):  # a task this installation does not know: list the names alone
         described = {}

@@ -19,9 +19,9 @@ from lerobot.datasets import LeRobotDataset
 from lerobot.utils.feature_utils import build_dataset_frame, hw_to_dataset_features
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.contrast.metrics import spl
-from lerobot_contrast.contrast.trial import Outcome
-from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
+from lerobot_contrast.contrast.metrics import score
+from lerobot_contrast.contrast.trial import Outcome, TrialContext
+from lerobot_contrast.record.observer import EpisodeFiles
 
 DATASET_DIR = "dataset"
 SIDECAR_DIR = "meta/contrast_eval"
@@ -237,8 +237,7 @@ def _check_features(root: Path, stored: dict[str, dict], wanted: dict[str, dict]
 
 def _episode_row(episode: int, context: TrialContext, outcome: Outcome, cost: float) -> dict[str, Any]:
     """One sidecar line: which trial the episode is, what it cost and how it scored."""
-    instance = context.instance
-    reference = outcome.reference_length
+    instance, scores = context.instance, score(outcome)
     return {
         "version": SIDECAR_VERSION,
         "episode_index": episode,
@@ -252,11 +251,11 @@ def _episode_row(episode: int, context: TrialContext, outcome: Outcome, cost: fl
         "cost": cost,
         "cost_unit": context.settings.get("cost_unit"),
         "status": outcome.status,
-        "success": bool(outcome.success),
-        "spl": None if reference is None else spl(outcome.success, reference, outcome.path_length),
-        "progress": outcome.progress if outcome.progress is not None else float(outcome.success),
+        "success": bool(scores["success"]),
+        "spl": scores["spl"],
+        "progress": scores["progress"],
         "path_length": outcome.path_length,
-        "reference_length": reference,
+        "reference_length": outcome.reference_length,
         "steps": outcome.steps,
         "settings": dict(context.settings),
         "instance": instance.to_json(),

@@ -18,11 +18,11 @@ import rerun as rr
 import rerun.blueprint as rrb
 from PIL import Image
 
-from lerobot_contrast.contrast.metrics import spl
+from lerobot_contrast.contrast.metrics import score
 from lerobot_contrast.contrast.perturbation import perturbation_label
-from lerobot_contrast.contrast.trial import Outcome
+from lerobot_contrast.contrast.trial import Outcome, TrialContext
+from lerobot_contrast.record.observer import EpisodeFiles
 from lerobot_contrast.record.rerun_scene import MapBounds, instruction_markdown, log_map, outcome_markdown
-from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
 
 APPLICATION_ID = "lerobot_contrast"  # no "/": Rerun 0.36+ rewrites such ids
 RERUN_DIR = "rerun"
@@ -205,8 +205,7 @@ class RerunEpisodeRecorder:
 
 
 def _descriptions(task: Any) -> dict[str, str]:
-    registry = getattr(task, "perturbations", None)
-    return {} if registry is None else {p.name: p.description for p in registry}
+    return {} if task is None else {p.name: p.description for p in task.perturbations}
 
 
 def _send_properties(recording: rr.RecordingStream, context: TrialContext, outcome: Outcome, cost: float) -> None:
@@ -229,9 +228,10 @@ def _send_properties(recording: rr.RecordingStream, context: TrialContext, outco
             task=str(settings.get("task", "")),
         ),
     )
-    metrics = {"success": bool(outcome.success), "status": outcome.status, "steps": int(outcome.steps)}
+    scores = score(outcome)
+    metrics = {"success": bool(scores["success"]), "status": outcome.status, "steps": int(outcome.steps)}
     metrics["cost"] = float(cost)
-    metrics["progress"] = float(outcome.progress if outcome.progress is not None else outcome.success)
-    if outcome.reference_length is not None:
-        metrics["spl"] = spl(outcome.success, outcome.reference_length, outcome.path_length)
+    metrics["progress"] = float(scores["progress"])
+    if scores["spl"] is not None:
+        metrics["spl"] = scores["spl"]
     recording.send_property("metric", rr.AnyValues(**metrics))

@@ -17,8 +17,7 @@ from lerobot_contrast.contrast.metrics import spl
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import staging_moves
-from lerobot_contrast.contrast.trial import Outcome
-from lerobot_contrast.runners.episode import TrialContext
+from lerobot_contrast.contrast.trial import Outcome, TrialContext
 
 AXIS_MEANING = {
     "L": "new wording, same behaviour",

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from lerobot_contrast import stats
+from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.runs import Group, Run, reference_for
 
 SEED = 0  # bootstrap randomness: the same inputs give the same report

@@ -8,8 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lerobot_contrast import stats
-from lerobot_contrast.reporting import analysis, figures, markdown
+from lerobot_contrast.reporting import analysis, figures, markdown, stats
 from lerobot_contrast.reporting.runs import Group, Run, group_runs, policy_pairs, reference_for
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from lerobot_contrast import stats
 from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.analysis import VersusFull
 
 METRIC_NAMES = {"spl": "SPL", "success": "success rate", "progress": "subgoal progress"}

@@ -15,7 +15,7 @@ from lerobot_contrast.record.hub import resolve_run
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.results import read_results
 from lerobot_contrast.record.run_dir import comparable_settings
-from lerobot_contrast.stats import frame
+from lerobot_contrast.reporting.stats import frame
 
 # Settings that say how a run was recorded or where its plan came from, not what it evaluated (besides those
 # a run may change between sessions, see comparable_settings).

@@ -3,12 +3,12 @@ import itertools
 import numpy as np
 import pytest
 
+from lerobot_contrast import Evaluation, preview
 from lerobot_contrast.contrast.cost import DistanceCost
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.schedule import nearest_neighbour, path_cost, two_opt
 from lerobot_contrast.contrast.strategy import make_plan
-from lerobot_contrast.evaluate import LoopState, assume_unchanged, run_trials
-from lerobot_contrast.tasks.language_table import LanguageTableTask
+from lerobot_contrast.domains.language_table import LanguageTableTask
 
 PERTURBATIONS = ["LB1", "LB2", "SB1", "SB2"]
 
@@ -25,8 +25,7 @@ def plan(task, instances, strategy, order, seed=3):
 
 
 def planned_cost(task, trials, seed=3):
-    state = LoopState(task.storage_scene())
-    records = list(run_trials(trials, task, DistanceCost(), None, seed, state, assume_unchanged))
+    records = preview(Evaluation(task, trials, DistanceCost(), seed=seed))
     return records[-1].cumulative_cost
 
 

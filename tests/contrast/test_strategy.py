@@ -7,7 +7,8 @@ from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.strategy import make_plan
 from lerobot_contrast.contrast.trial import Outcome
-from lerobot_contrast.evaluate import BudgetError, LoopState, assume_unchanged, check_budget, run_trials
+from lerobot_contrast.evaluation import BudgetError, Evaluation, assume_unchanged, check_budget
+from lerobot_contrast.evaluation import run as run_evaluation
 
 from .toy_task import ToyTask
 
@@ -38,8 +39,7 @@ def pusher(to: str | None = None):
 def run(task, strategy, instances, names=None, budget=None, execute=None, repeats=1, seed=0):
     perturbations = task.perturbations.select(names) if strategy == "contrast" else []
     plan = make_plan(strategy, instances, perturbations, repeats, np.random.default_rng(seed))
-    state = LoopState(task.storage_scene())
-    return list(run_trials(plan, task, DistanceCost(), budget, seed, state, execute or pusher()))
+    return run_evaluation(Evaluation(task, plan, DistanceCost(), budget, seed, execute=execute or pusher())).records
 
 
 def test_contrast_runs_each_base_then_its_perturbations_without_resetting():
@@ -119,8 +119,8 @@ def test_budget_below_the_first_trial_is_refused_with_its_cost():
     task = ToyTask()
     plan = make_plan("contrast", bases(1), [], 1, np.random.default_rng(0))
     with pytest.raises(BudgetError, match=r"--budget 1 m is below the cost of staging the first trial \(2.00 m\)"):
-        check_budget(plan, task, DistanceCost(), 1.0, 0, task.storage_scene())
-    check_budget(plan, task, DistanceCost(), 2.0, 0, task.storage_scene())
+        check_budget(Evaluation(task, plan, DistanceCost(), budget=1.0))
+    check_budget(Evaluation(task, plan, DistanceCost(), budget=2.0))
 
 
 def test_unknown_strategy_and_perturbation_name_the_flag_and_the_choices():

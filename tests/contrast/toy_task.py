@@ -10,11 +10,12 @@ import numpy as np
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
 from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.contrast.task import Task
 
 THRESHOLD = 0.1
 
 
-class ToyTask:
+class ToyTask(Task):
     name = "toy"
 
     def __init__(self) -> None:

@@ -9,8 +9,8 @@ from lerobot.policies import make_pre_post_processors
 from lerobot.policies.utils import prepare_observation_for_inference
 from lerobot_policy_language_table import LanguageTablePolicy
 
-import lerobot_contrast.sims  # noqa: F401  (registers the env id)
-from lerobot_contrast.sims.language_table.physics import clip_target
+import lerobot_contrast.domains.language_table.env  # noqa: F401  (registers the env id)
+from lerobot_contrast.domains.language_table.physics import clip_target
 
 
 def test_converted_policy_drives_the_simulator(converted):

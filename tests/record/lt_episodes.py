@@ -9,17 +9,17 @@ from typing import Any
 
 import numpy as np
 
-from lerobot_contrast.contrast.perturbation import perturb
-from lerobot_contrast.contrast.trial import Outcome, TrialRecord
-from lerobot_contrast.policies import OraclePolicy
+from lerobot_contrast.contrast.task import perturb
+from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
+from lerobot_contrast.domains.language_table import LanguageTableTask
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim, episode_features
+from lerobot_contrast.policies.oracle import OraclePolicy
 from lerobot_contrast.record.journal import Journal
+from lerobot_contrast.record.observer import EpisodeFiles
 from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import write_json_atomic
 from lerobot_contrast.record.summary import summarize
-from lerobot_contrast.runners.episode import EpisodeFiles, TrialContext
-from lerobot_contrast.sims.language_table.config_language_table_sim import LanguageTableSimConfig
-from lerobot_contrast.sims.language_table.language_table_sim import LanguageTableSim, episode_features
-from lerobot_contrast.tasks.language_table import LanguageTableTask
 
 FEATURES = episode_features()
 POSE_KEYS = LanguageTableSim.pose_keys
@@ -73,7 +73,7 @@ class Episodes:
 
     def run(self, observer: Any, context: TrialContext, steps: int = 12) -> tuple[Outcome, EpisodeFiles]:
         observation = self.stage(context)
-        policy = OraclePolicy(self.robot.read_scene, self.task, {context.base.id: context.base})
+        policy = OraclePolicy(self.robot.read_scene, self.task)
         policy.reset(context)
         observer.start(context, FEATURES, POSE_KEYS)
         start, path = time.perf_counter(), 0.0

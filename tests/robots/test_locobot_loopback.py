@@ -9,8 +9,8 @@ import time
 import numpy as np
 import pytest
 from lerobot_robot_locobot import Locobot, LocobotConnectionError, SceneIOUnavailable, one_hot
-from lerobot_robot_locobot.backends.ros2 import Ros2Backend
-from lerobot_robot_locobot.backends.sim import SimBackend
+from lerobot_robot_locobot.backend_ros2 import Ros2Backend
+from lerobot_robot_locobot.backend_sim import SimBackend
 from lerobot_robot_locobot.config_host import HostConfig, Ros2Config, SimConfig
 from lerobot_robot_locobot.host import HostThread
 from lerobot_robot_locobot.keys import create_keys

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 import pytest
-from lerobot_robot_locobot.backends.ros2 import Ros2Backend, SceneIONotSupported
+from lerobot_robot_locobot.backend_ros2 import Ros2Backend, SceneIONotSupported
 from lerobot_robot_locobot.config_host import Ros2Config
 from lerobot_robot_locobot.odometry import wrap
 

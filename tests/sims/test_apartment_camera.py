@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.scene import Pose
-from lerobot_contrast.sims.apartment import CATALOG, CameraSpec, Footprints, RayCaster, Room, render_map
+from lerobot_contrast.domains.vln.apartment import CATALOG, CameraSpec, Footprints, RayCaster, Room, render_map
 
 SPEC = CameraSpec(width=160, height=120, hfov_deg=69.0, mount_height=0.55)
 

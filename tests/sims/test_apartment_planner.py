@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.scene import Pose
-from lerobot_contrast.sims.apartment import Footprints, Grid, Room, clearance, hausdorff
+from lerobot_contrast.domains.vln.apartment import Footprints, Grid, Room, clearance, hausdorff
 
 
 def grid(objects: dict[str, Pose], resolution: float = 0.1) -> Grid:

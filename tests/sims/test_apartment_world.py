@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.scene import Pose
-from lerobot_contrast.sims.apartment import Apartment, furniture_for
+from lerobot_contrast.domains.vln.apartment import Apartment, furniture_for
 
 
 def room_with(collision: str, **objects: Pose) -> Apartment:

@@ -11,8 +11,8 @@ import pytest
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.sims.language_table.env import LanguageTableEnv
-from lerobot_contrast.tasks.language_table import LanguageTableTask
+from lerobot_contrast.domains.language_table import LanguageTableTask
+from lerobot_contrast.domains.language_table.env import LanguageTableEnv
 
 
 def sampled(family: str, seed: int = 0) -> Instance:
@@ -96,12 +96,12 @@ def test_reset_without_instance_samples_the_family_from_the_seed():
 
 
 def test_registered_with_gymnasium():
-    import lerobot_contrast.sims
+    from lerobot_contrast.domains.language_table import env as module
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # registering twice would warn about overriding
-        importlib.reload(lerobot_contrast.sims)
-    env = gym.make(lerobot_contrast.sims.LANGUAGE_TABLE_ID, obs_type="state")
+        importlib.reload(module)
+    env = gym.make(module.LANGUAGE_TABLE_ID, obs_type="state")
     assert env.spec.max_episode_steps == 200
     assert env.unwrapped._max_episode_steps == 200
     obs, info = env.reset(seed=0)
@@ -112,7 +112,7 @@ def test_registered_with_gymnasium():
 
 def test_a_fresh_interpreter_makes_the_env_from_its_module_qualified_id():
     code = (
-        "import gymnasium; env = gymnasium.make('lerobot_contrast.sims:lerobot_contrast/LanguageTable-v0');"
+        "import gymnasium; env = gymnasium.make('lerobot_contrast.domains.language_table.env:lerobot_contrast/LanguageTable-v0');"
         "print(sorted(env.reset(seed=0)[0]))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout

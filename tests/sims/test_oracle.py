@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.instance import Instance
-from lerobot_contrast.sims.language_table.env import LanguageTableEnv
-from lerobot_contrast.sims.language_table.oracle import PushOracle, plan_path, reference_path
-from lerobot_contrast.tasks.language_table import FAMILIES, LanguageTableTask
+from lerobot_contrast.domains.language_table import FAMILIES, LanguageTableTask
+from lerobot_contrast.domains.language_table.env import LanguageTableEnv
+from lerobot_contrast.domains.language_table.oracle import PushOracle, plan_path, reference_path
 
 TASK = LanguageTableTask()
 

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from lerobot_contrast.sims.language_table.physics import TabletopPhysics, footprint_hull
-from lerobot_contrast.tasks.language_table.board import SHAPE_FOOTPRINT, WORKSPACE_BOUNDS
+from lerobot_contrast.domains.language_table.board import SHAPE_FOOTPRINT, WORKSPACE_BOUNDS
+from lerobot_contrast.domains.language_table.physics import TabletopPhysics, footprint_hull
 
 BLOCKS = {
     "red_moon": (0.30, -0.10, 0.3),

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.sims.language_table import shapes
-from lerobot_contrast.sims.language_table.render import TabletopRenderer
-from lerobot_contrast.tasks.language_table import board
+from lerobot_contrast.domains.language_table import board, shapes
+from lerobot_contrast.domains.language_table.render import TabletopRenderer
 
 EFFECTOR = (0.3, -0.1)
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.tasks.language_table import families as fam
-from lerobot_contrast.tasks.language_table.wording import render
+from lerobot_contrast.domains.language_table import families as fam
+from lerobot_contrast.domains.language_table.wording import render
 
 # Far corners of the sampling box, out of the way of the hand-placed blocks.
 PARKING = [(0.24, -0.21), (0.24, 0.21), (0.51, -0.21), (0.51, 0.21), (0.24, 0.0), (0.51, 0.0)]

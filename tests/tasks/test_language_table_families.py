@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.scene import Pose
-from lerobot_contrast.tasks.language_table import board, is_achieved, push_target, rebase
-from lerobot_contrast.tasks.language_table import families as fam
+from lerobot_contrast.domains.language_table import board, is_achieved, push_target, rebase
+from lerobot_contrast.domains.language_table import families as fam
 
 from .lt_helpers import ABS_WORDS, B2B_WORDS, B2BREL_WORDS, REL_WORDS, SEP_WORDS, make, scene
 

@@ -7,12 +7,12 @@ import itertools
 import numpy as np
 import pytest
 
-from lerobot_contrast.contrast.perturbation import perturb
 from lerobot_contrast.contrast.scene import Pose
-from lerobot_contrast.tasks.language_table import LanguageTableTask, board, geometry
-from lerobot_contrast.tasks.language_table import families as fam
-from lerobot_contrast.tasks.language_table.perturbations import KEEP_CLEAR, MIN_MOVE
-from lerobot_contrast.tasks.language_table.wording import render
+from lerobot_contrast.contrast.task import perturb
+from lerobot_contrast.domains.language_table import LanguageTableTask, board, geometry
+from lerobot_contrast.domains.language_table import families as fam
+from lerobot_contrast.domains.language_table.perturbations import KEEP_CLEAR, MIN_MOVE
+from lerobot_contrast.domains.language_table.wording import render
 
 from .lt_helpers import ABS_WORDS, B2B_WORDS, B2BREL_WORDS, REL_WORDS, SEP_WORDS, make, scene
 

@@ -13,7 +13,7 @@ import pytest
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
-from lerobot_contrast.tasks.language_table import (
+from lerobot_contrast.domains.language_table import (
     FAMILIES,
     LanguageTableTask,
     board,
@@ -21,7 +21,7 @@ from lerobot_contrast.tasks.language_table import (
     geometry,
     push_target,
 )
-from lerobot_contrast.tasks.language_table.wording import render
+from lerobot_contrast.domains.language_table.wording import render
 
 
 @pytest.fixture(scope="module")
@@ -134,7 +134,7 @@ def test_scene_sampler_is_fast_and_dense_enough_for_clumps():
 
 
 def test_instruction_to_array():
-    from lerobot_contrast.tasks.language_table import instruction_to_array
+    from lerobot_contrast.domains.language_table import instruction_to_array
 
     arr = instruction_to_array("push the red moon")
     assert arr.shape == (512,) and arr.dtype == np.int32
@@ -146,7 +146,7 @@ def test_instruction_to_array():
 
 def test_no_heavy_imports():
     code = (
-        "import sys, lerobot_contrast.tasks.language_table\n"
+        "import sys, lerobot_contrast.domains.language_table\n"
         "bad = [m for m in ('gymnasium', 'pymunk', 'torch', 'lerobot') if m in sys.modules]\n"
         "assert not bad, bad\n"
     )

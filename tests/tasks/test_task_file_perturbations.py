@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.instance import Instance
-from lerobot_contrast.contrast.perturbation import perturb
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.tasks import make_task
-from lerobot_contrast.tasks.task_file import load_task
-from lerobot_contrast.tasks.task_file.goals import involved
+from lerobot_contrast.contrast.task import perturb
+from lerobot_contrast.domains import load_task
+from lerobot_contrast.domains.task_file import load_task_file
+from lerobot_contrast.domains.task_file.goals import involved
 from tests.tasks.task_file_fixtures import CUPS, write
 
 EXAMPLES = ("so101_blocks", "lekiwi_fetch")
@@ -55,7 +55,7 @@ def check_claim(task, axis: str, base: Instance, out: Instance) -> None:
 
 @pytest.mark.parametrize("example", EXAMPLES)
 def test_every_generic_perturbation_keeps_its_claim_on_the_shipped_examples(example):
-    task = make_task(example)
+    task = load_task(example)
     rng = np.random.default_rng(3)
     applied, added_removed = Counter(), Counter()
     for base in task.sample(30, rng):
@@ -75,7 +75,7 @@ def test_every_generic_perturbation_keeps_its_claim_on_the_shipped_examples(exam
 
 @pytest.fixture
 def cups(tmp_path):
-    return load_task(write(tmp_path, CUPS))
+    return load_task_file(write(tmp_path, CUPS))
 
 
 def hand_built(task) -> Instance:
@@ -92,7 +92,7 @@ def test_flip_turns_the_region_word_and_the_goal_around(cups):
 
 
 def test_paraphrase_uses_the_synonyms_and_the_referents_other_words(tmp_path):
-    task = load_task(
+    task = load_task_file(
         write(
             tmp_path,
             CUPS.replace("{colour: red, category: cup,", "{colour: red, category: cup, words: [red cup, red mug],"),
@@ -120,7 +120,7 @@ def test_custom_perturbations_load_by_module_function_with_params_and_the_task(t
         "  - {name: L2, axis: L, function: 'tests.tasks.task_file_fixtures:louder', params: {suffix: ', please'}}\n"
         "  - {name: LB2, axis: LB, function: 'tests.tasks.task_file_fixtures:other_cup'}\n",
     )
-    task = load_task(write(tmp_path, text))
+    task = load_task_file(write(tmp_path, text))
     base, rng = hand_built(task), np.random.default_rng(0)
     assert task.perturbations.get("L2").axis == "L" and task.perturbations.get("LB2").axis == "LB"
     assert perturb(task, task.perturbations.get("L2"), base, rng).instruction == "move the red cup to the left, please"
@@ -135,6 +135,6 @@ def test_a_custom_module_beside_the_task_file_is_found(tmp_path):
     text = CUPS.replace(
         "{name: SB, kind: move_goal_object}", "{name: SHOUT, axis: L, function: 'my_perturbations:shout'}"
     )
-    task = load_task(write(tmp_path, text))
+    task = load_task_file(write(tmp_path, text))
     out = perturb(task, task.perturbations.get("SHOUT"), hand_built(task), np.random.default_rng(0))
     assert out.instruction == "MOVE THE RED CUP TO THE LEFT" and out.perturbation == "SHOUT"

@@ -9,12 +9,12 @@ import sys
 import numpy as np
 import pytest
 
+from lerobot_contrast import Evaluation, preview
 from lerobot_contrast.contrast.scene import Pose
 from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.strategy import make_plan
-from lerobot_contrast.evaluate import LoopState, assume_unchanged, run_trials
-from lerobot_contrast.tasks import make_task
-from lerobot_contrast.tasks.task_file import example_names, examples_dir, load_task
+from lerobot_contrast.domains import load_task
+from lerobot_contrast.domains.task_file import example_names, examples_dir, load_task_file
 from tests.tasks.task_file_fixtures import CUPS, LISTED, write
 
 EXAMPLES = ("so101_blocks", "lekiwi_fetch")
@@ -24,13 +24,12 @@ def dry_run(task, strategy: str, n: int, cost: str, budget: float | None = None,
     rng = np.random.default_rng(seed)
     perturbations = list(task.perturbations) if strategy == "contrast" else []
     plan = make_plan(strategy, task.sample(n, rng), perturbations, 1, rng)
-    state = LoopState(task.storage_scene())
-    return plan, list(run_trials(plan, task, task.cost_model(cost), budget, seed, state, assume_unchanged))
+    return plan, preview(Evaluation(task, plan, task.cost_model(cost), budget, seed))
 
 
 @pytest.mark.parametrize("example", EXAMPLES)
 def test_the_contrast_plan_restages_in_place_and_charges_only_scene_changes(example):
-    task = make_task(example)
+    task = load_task(example)
     plan, records = dry_run(task, "contrast", 4, "distance")
     assert len(records) == len(plan) == 4 * (1 + len(task.perturbations))
     first = records[0]
@@ -54,7 +53,7 @@ def test_the_contrast_plan_restages_in_place_and_charges_only_scene_changes(exam
 
 @pytest.mark.parametrize("example", EXAMPLES)
 def test_the_budget_stops_the_plan_after_the_trial_that_crosses_it(example):
-    task = make_task(example)
+    task = load_task(example)
     _, unlimited = dry_run(task, "standard", 10, "reset_time")
     budget = unlimited[4].cumulative_cost - 1.0
     _, records = dry_run(task, "standard", 10, "reset_time", budget=budget)
@@ -62,14 +61,14 @@ def test_the_budget_stops_the_plan_after_the_trial_that_crosses_it(example):
 
 
 def test_the_cost_models_use_the_files_tolerance_add_remove_and_handling_times():
-    so101 = make_task("so101_blocks")
+    so101 = load_task("so101_blocks")
     scene = so101.sample(1, np.random.default_rng(0))[0].scene
     red = scene.objects["red_cube"]
     distance = so101.cost_model("distance")
     assert distance(scene, scene.with_object("red_cube", Pose(red.x + 0.1, red.y))) == pytest.approx(0.1)
     assert distance(scene, scene.with_object("red_cube", Pose(red.x + 0.004, red.y))) == 0.0  # tolerance 0.5 cm
     assert distance(scene, scene.with_object("yellow_cube", Pose(0.3, 0.0))) == pytest.approx(0.3)  # add_remove
-    lekiwi = make_task("lekiwi_fetch")
+    lekiwi = load_task("lekiwi_fetch")
     room = lekiwi.sample(1, np.random.default_rng(0))[0].scene
     box, cup = room.objects["cardboard_box"], room.objects["red_cup"]
     reset = lekiwi.cost_model("reset_time")
@@ -79,7 +78,7 @@ def test_the_cost_models_use_the_files_tolerance_add_remove_and_handling_times()
 
 
 def test_a_listed_evaluation_set_is_planned_as_listed(tmp_path):
-    task = load_task(write(tmp_path, CUPS + LISTED))
+    task = load_task_file(write(tmp_path, CUPS + LISTED))
     plan, records = dry_run(task, "standard", 2, "distance", seed=1)
     assert sorted(r.instance.instruction for r in records) == [
         "move the red cup to the left",
@@ -91,8 +90,8 @@ def test_a_listed_evaluation_set_is_planned_as_listed(tmp_path):
 def test_the_examples_ship_with_the_package_and_load_by_name_and_by_path():
     assert set(EXAMPLES) <= set(example_names())
     for name in EXAMPLES:
-        by_path = make_task(str(examples_dir() / f"{name}.yaml"))
-        assert by_path.name == make_task(name).name == name
+        by_path = load_task(str(examples_dir() / f"{name}.yaml"))
+        assert by_path.name == load_task(name).name == name
 
 
 def test_the_dry_run_prints_the_plan_with_moves_and_planned_cost():

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.tasks import make_task
-from lerobot_contrast.tasks.task_file import TaskFileError, load_task, task_from_dict
+from lerobot_contrast.domains import load_task
+from lerobot_contrast.domains.task_file import TaskFileError, load_task_file, task_from_dict
 from tests.tasks.task_file_fixtures import CUPS, LISTED, write
 
 # (replacements applied to CUPS, text on the line the error must name, expected message fragment)
@@ -200,7 +200,7 @@ def test_each_mistake_gets_one_line_naming_file_line_key_and_what_is_expected(ca
     text = _apply(replacements, listed="listed" in case)
     path = write(tmp_path, text)
     with pytest.raises(TaskFileError) as raised:
-        load_task(path)
+        load_task_file(path)
     error = str(raised.value)
     assert "\n" not in error and message in error, error
     lines = [i for i, line in enumerate(text.splitlines(), 1) if marker is not None and marker in line]
@@ -211,8 +211,8 @@ def test_each_mistake_gets_one_line_naming_file_line_key_and_what_is_expected(ca
 
 
 def test_the_base_file_and_its_listed_variant_are_valid(tmp_path):
-    assert [p.name for p in load_task(write(tmp_path, CUPS)).perturbations] == ["L", "LB", "S", "SB"]
-    listed = load_task(write(tmp_path, CUPS + LISTED))
+    assert [p.name for p in load_task_file(write(tmp_path, CUPS)).perturbations] == ["L", "LB", "S", "SB"]
+    listed = load_task_file(write(tmp_path, CUPS + LISTED))
     assert [i.instruction for i in listed.sample(2, np.random.default_rng(0))] == [
         "move the red cup to the left",
         "put the blue cup on the right",
@@ -220,7 +220,7 @@ def test_the_base_file_and_its_listed_variant_are_valid(tmp_path):
 
 
 def test_asking_for_more_listed_instances_than_the_file_lists_is_refused(tmp_path):
-    task = load_task(write(tmp_path, CUPS + LISTED))
+    task = load_task_file(write(tmp_path, CUPS + LISTED))
     with pytest.raises(UserError, match=r"--n_instances=3: .*cups.yaml lists 2 instances; ask for at most 2"):
         task.sample(3, np.random.default_rng(0))
 
@@ -242,12 +242,12 @@ def test_errors_from_python_data_name_the_key_without_a_line():
 )
 def test_unknown_tasks_are_named(name, message):
     with pytest.raises(UserError, match=message):
-        make_task(name)
+        load_task(name)
 
 
 def test_unknown_families_are_named():
     with pytest.raises(UserError, match=r"--families: unknown families \['stack'\] for task 'so101_blocks'"):
-        make_task("so101_blocks", families=["stack"])
+        load_task("so101_blocks", families=["stack"])
 
 
 def test_the_cli_prints_a_bad_task_file_as_one_error_line(tmp_path):
@@ -271,7 +271,7 @@ def test_deleting_any_line_gives_a_valid_task_or_a_one_line_error(tmp_path):
     for i in range(len(lines)):
         path = write(tmp_path, "".join(lines[:i] + lines[i + 1 :]))
         try:
-            load_task(path)
+            load_task_file(path)
             outcomes.add("valid")
         except TaskFileError as error:
             assert "\n" not in str(error) and str(error).startswith(f"{path}:")
@@ -280,7 +280,7 @@ def test_deleting_any_line_gives_a_valid_task_or_a_one_line_error(tmp_path):
 
 
 def test_instances_built_in_python_are_checked_against_the_template(tmp_path):
-    task = load_task(write(tmp_path, CUPS))
+    task = load_task_file(write(tmp_path, CUPS))
     scene = task.storage_scene()
     with pytest.raises(UserError, match=r"task 'cups' has no template 'carry'; it has: move"):
         task.make_instance("x", "carry", {}, scene)

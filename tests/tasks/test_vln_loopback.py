@@ -9,11 +9,11 @@ import pytest
 from lerobot_robot_locobot import Locobot
 from lerobot_robot_locobot.host import HostThread
 
+from lerobot_contrast.contrast.staging import SceneIO
+from lerobot_contrast.domains.vln import VLNTask
 from lerobot_contrast.eval import main
-from lerobot_contrast.runners.episode import SceneIO
-from lerobot_contrast.runners.robot import RobotRunner
-from lerobot_contrast.tasks.vln import VLNTask
-from lerobot_contrast.tasks.vln.policy import RouteFollower
+from lerobot_contrast.policies.route_follower import RouteFollower
+from lerobot_contrast.runner import RobotRunner
 from tests.robots.locobot_helpers import FREE_PORTS, client_config
 from tests.tasks.test_vln_policy import context_for
 

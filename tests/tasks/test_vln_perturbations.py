@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast import DistanceCost
-from lerobot_contrast.contrast.perturbation import perturb
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.sims.apartment import hausdorff, resample
-from lerobot_contrast.tasks.vln import VLNTask, routes
-from lerobot_contrast.tasks.vln.perturbations import PLACEMENT_GAP_M, _placement_ok
-from lerobot_contrast.tasks.vln.wording import synonyms
+from lerobot_contrast.contrast.task import perturb
+from lerobot_contrast.domains.vln import VLNTask, routes
+from lerobot_contrast.domains.vln.apartment import hausdorff, resample
+from lerobot_contrast.domains.vln.perturbations import PLACEMENT_GAP_M, _placement_ok
+from lerobot_contrast.domains.vln.wording import synonyms
 
 TASK = VLNTask()
 CASES = [(instance, seed) for instance in TASK.examples for seed in (0, 1)]

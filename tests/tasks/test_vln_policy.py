@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from lerobot_robot_locobot.actions import discrete_command
 
-from lerobot_contrast.contrast.perturbation import perturb
 from lerobot_contrast.contrast.scene import Pose
-from lerobot_contrast.runners.episode import TrialContext
-from lerobot_contrast.sims.apartment import Apartment
-from lerobot_contrast.tasks.vln import VLNTask
-from lerobot_contrast.tasks.vln.policy import RouteFollower
+from lerobot_contrast.contrast.task import perturb
+from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.domains.vln import VLNTask
+from lerobot_contrast.domains.vln.apartment import Apartment
+from lerobot_contrast.policies.route_follower import RouteFollower
 
 TASK = VLNTask()
 

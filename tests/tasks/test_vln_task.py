@@ -5,20 +5,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from lerobot_contrast import Evaluation, preview
 from lerobot_contrast.contrast import DistanceCost, make_plan
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose
-from lerobot_contrast.contrast.task import judge, outcome_mode, reference_length, subgoals
-from lerobot_contrast.evaluate import LoopState, assume_unchanged, run_trials
-from lerobot_contrast.sims.apartment import resample
-from lerobot_contrast.tasks import make_task
-from lerobot_contrast.tasks.vln import VLNTask
-from lerobot_contrast.tasks.vln.wording import name_of
+from lerobot_contrast.domains import load_task
+from lerobot_contrast.domains.vln import VLNTask
+from lerobot_contrast.domains.vln.apartment import resample
+from lerobot_contrast.domains.vln.wording import name_of
 
 
 @pytest.fixture(scope="module")
 def task() -> VLNTask:
-    return make_task("vln")
+    return load_task("vln")
 
 
 def test_the_shipped_set_is_five_arrangements_with_two_subgoal_instructions(task):
@@ -29,8 +28,8 @@ def test_the_shipped_set_is_five_arrangements_with_two_subgoal_instructions(task
         assert not task.is_achieved(instance, instance.scene)
         first, final = instance.goal["subgoals"]
         assert instance.instruction.index(name_of(first)) < instance.instruction.index(name_of(final))
-        assert reference_length(task, instance) > 3.0
-    assert outcome_mode(task) == "subgoals" and subgoals(task, task.examples[3]) == ["the TV stand", "the desk"]
+        assert task.reference_length(instance) > 3.0
+    assert task.outcome == "subgoals" and task.subgoals(task.examples[3]) == ["the TV stand", "the desk"]
 
 
 def test_sampling_draws_the_shipped_instances_and_refuses_more(task):
@@ -46,7 +45,7 @@ def test_sampling_draws_the_shipped_instances_and_refuses_more(task):
 def test_the_paper_shaped_plan_is_75_trials_and_perturbations_cost_little(task):
     rng = np.random.default_rng(0)
     plan = make_plan("contrast", task.sample(5, rng), list(task.perturbations), repeats=3, rng=rng)
-    records = list(run_trials(plan, task, DistanceCost(), None, 0, LoopState(task.storage_scene()), assume_unchanged))
+    records = preview(Evaluation(task, plan, DistanceCost()))
     assert len(plan) == 75 and [r.status for r in records] == ["done"] * 75
     cost = {axis: sum(r.cost for r in records if r.axis == axis) for axis in (None, "L", "LB", "S", "SB")}
     assert cost["L"] == cost["LB"] == 0.0 and 0 < cost["S"] + cost["SB"] < 0.2 * cost[None]
@@ -60,14 +59,14 @@ def test_progress_counts_subgoals_reached_in_order_the_last_where_the_robot_stop
     instance = task.examples[0]  # lamp at (4.1, 3.5), then the bookshelf along the wall at x = 0.25, y = 1.8
     start, near_lamp, at_shelf = (7.0, 1.0), (4.1, 2.9), (0.9, 1.8)
     scene = instance.scene
-    assert judge(task, instance, path_through(start, near_lamp, at_shelf), scene.with_robot(None)).progress == 1.0
-    assert judge(task, instance, path_through(start, near_lamp, at_shelf), scene.with_robot(None)).success
-    assert judge(task, instance, path_through(start, near_lamp), scene.with_robot(None)).progress == 0.5
-    assert judge(task, instance, path_through(start, at_shelf), scene.with_robot(None)).progress == 0.0
-    passed_shelf = judge(task, instance, path_through(start, near_lamp, at_shelf, (4.0, 1.0)), scene.with_robot(None))
+    assert task.judge(instance, path_through(start, near_lamp, at_shelf), scene.with_robot(None)).progress == 1.0
+    assert task.judge(instance, path_through(start, near_lamp, at_shelf), scene.with_robot(None)).success
+    assert task.judge(instance, path_through(start, near_lamp), scene.with_robot(None)).progress == 0.5
+    assert task.judge(instance, path_through(start, at_shelf), scene.with_robot(None)).progress == 0.0
+    passed_shelf = task.judge(instance, path_through(start, near_lamp, at_shelf, (4.0, 1.0)), scene.with_robot(None))
     assert passed_shelf.progress == 0.5 and not passed_shelf.success  # it did not stop there
     # The robot's final pose in the scene counts as where it stopped.
-    assert judge(task, instance, path_through(start, near_lamp), scene.with_robot(Pose(*at_shelf))).success
+    assert task.judge(instance, path_through(start, near_lamp), scene.with_robot(Pose(*at_shelf))).success
 
 
 def test_the_reference_route_is_the_best_path_and_ndtw_scores_paths_against_it(task):

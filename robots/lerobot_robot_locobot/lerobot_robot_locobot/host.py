@@ -16,7 +16,7 @@ from typing import Any
 import zmq
 
 from lerobot_robot_locobot.actions import COMMANDS, clamp
-from lerobot_robot_locobot.backends import Backend, make_backend
+from lerobot_robot_locobot.backend import Backend, make_backend
 from lerobot_robot_locobot.config_host import HostConfig, HostConfigError, parse_config, validate
 from lerobot_robot_locobot.keys import KeyFileError, secure_server, start_authenticator
 from lerobot_robot_locobot.odometry import OdometryFrame

@@ -1,0 +1,123 @@
+"""The Language-Table-compatible tabletop as a LeRobot `Robot`: camera and effector state out, effector deltas in.
+
+It also implements `SceneIO`, so the evaluator (or the operator, by answering prompts) stages block
+layouts and judges goals from the block poses, exactly as a perception-equipped real set-up would.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from lerobot.robots import Robot
+from lerobot.utils.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.domains.language_table import board
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
+from lerobot_contrast.domains.language_table.physics import TabletopPhysics
+
+CAMERA = "top"
+STATE = ("effector.x", "effector.y", "effector_target.x", "effector_target.y")
+ACTION = ("delta_x", "delta_y")
+
+
+def episode_features(camera: bool = True) -> dict[str, dict[str, Any]]:
+    """The robot's observation and action features, as episode observers receive them."""
+    observation: dict[str, Any] = dict.fromkeys(STATE, float)
+    if camera:
+        observation[CAMERA] = (board.IMAGE_HEIGHT, board.IMAGE_WIDTH, 3)
+    return {"observation": observation, "action": dict.fromkeys(ACTION, float)}
+
+
+class LanguageTableSim(Robot):
+    config_class = LanguageTableSimConfig
+    name = "language_table_sim"
+    simulated = True  # the evaluator may step it as fast as it computes
+    stageable_objects = board.ALL_BLOCKS
+    # Observation keys holding the effector's planar position in the scene frame.
+    pose_keys = ("effector.x", "effector.y")
+
+    def __init__(self, config: LanguageTableSimConfig) -> None:
+        super().__init__(config)
+        self.config = config
+        self.cameras: dict[str, Any] = {}  # a rendered camera, not a LeRobot camera device
+        self._physics: TabletopPhysics | None = None
+        self._renderer = None
+
+    @property
+    def observation_features(self) -> dict[str, Any]:
+        return episode_features(self.config.camera)["observation"]
+
+    @property
+    def action_features(self) -> dict[str, type]:
+        return episode_features()["action"]
+
+    @property
+    def is_connected(self) -> bool:
+        return self._physics is not None
+
+    @property
+    def is_calibrated(self) -> bool:
+        return True
+
+    def connect(self, calibrate: bool = True) -> None:
+        if self.is_connected:
+            raise DeviceAlreadyConnectedError(f"{self} is already connected")
+        self._physics = TabletopPhysics()
+        self._physics.set_state({}, (board.CENTER_X, board.CENTER_Y))
+        self.configure()
+
+    def calibrate(self) -> None:
+        pass
+
+    def configure(self) -> None:
+        pass
+
+    def _require(self) -> TabletopPhysics:
+        if self._physics is None:
+            raise DeviceNotConnectedError(f"{self} is not connected; call connect() first")
+        return self._physics
+
+    def get_observation(self) -> dict[str, Any]:
+        physics = self._require()
+        (ex, ey), (tx, ty) = physics.effector, physics.target
+        observation: dict[str, Any] = dict(zip(STATE, (ex, ey, tx, ty), strict=True))
+        if self.config.camera:
+            observation[CAMERA] = self._render(physics)
+        return observation
+
+    def _render(self, physics: TabletopPhysics) -> np.ndarray:
+        if self._renderer is None:  # imported on first use: camera-less rollouts never load cv2
+            from lerobot_contrast.domains.language_table.render import TabletopRenderer
+
+            self._renderer = TabletopRenderer(board.IMAGE_HEIGHT, board.IMAGE_WIDTH)
+        blocks, effector = physics.state()
+        return self._renderer.render(blocks, effector)
+
+    def send_action(self, action: dict[str, Any]) -> dict[str, Any]:
+        physics = self._require()
+        delta = np.clip([float(action[key]) for key in ACTION], -board.MAX_ACTION, board.MAX_ACTION)
+        physics.step(delta)
+        return dict(zip(ACTION, delta.tolist(), strict=True))
+
+    def disconnect(self) -> None:
+        if not self.is_connected:
+            raise DeviceNotConnectedError(f"{self} is not connected")
+        self._physics = None
+
+    def read_scene(self) -> Scene:
+        blocks, (ex, ey) = self._require().state()
+        return Scene(objects={name: Pose(*pose) for name, pose in blocks.items()}, robot=Pose(ex, ey))
+
+    def stage_scene(self, scene: Scene) -> None:
+        unknown = sorted(set(scene.objects) - set(board.ALL_BLOCKS))
+        if unknown:
+            raise UserError(
+                f"--robot.type=language_table_sim can only place Language-Table blocks, not {', '.join(unknown)}; "
+                "evaluate this task on a robot that matches its objects"
+            )
+        robot = scene.robot or Pose(board.CENTER_X, board.CENTER_Y)
+        blocks = {name: (pose.x, pose.y, pose.yaw) for name, pose in scene.objects.items()}
+        self._require().set_state(blocks, (robot.x, robot.y))

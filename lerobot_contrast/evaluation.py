@@ -1,0 +1,272 @@
+"""The spine: an `Evaluation` says what to run, on what, and where to record it; `run(evaluation)` stages, executes
+and scores each planned trial in order, and owns the run's journal, results and summary."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lerobot_contrast.console import trial_line
+from lerobot_contrast.contrast.cost import CostModel
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.metrics import score
+from lerobot_contrast.contrast.scene import Scene
+from lerobot_contrast.contrast.staging import Staged, materialize, trial_rng
+from lerobot_contrast.contrast.strategy import PlannedTrial, exceeds_budget
+from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
+from lerobot_contrast.operator_console import OperatorConsole
+from lerobot_contrast.policies.base import Policy
+from lerobot_contrast.record.observer import EpisodeObserver
+from lerobot_contrast.record.plan_file import write_plan
+from lerobot_contrast.record.results import write_results
+from lerobot_contrast.record.run_dir import RunDir, open_run_dir
+from lerobot_contrast.record.summary import summarize
+from lerobot_contrast.runner import RobotRunner
+
+Execute = Callable[[TrialContext], Outcome]
+# Trials whose staging was paid for: the scene they left behind is where the next one starts.
+STAGED = ("done", "aborted")
+
+
+class BudgetError(UserError):
+    pass
+
+
+@dataclass
+class Evaluation:
+    """One contrast-set evaluation. Give `robot` (a connected LeRobot robot) and `policy`, or `execute`, a stand-in
+    that runs one trial and reports its `Outcome`. With `output_dir`, the run is recorded there (and resumable)."""
+
+    task: Task
+    plan: list[PlannedTrial]
+    cost_model: CostModel
+    budget: float | None = None  # stop once the cumulative cost exceeds it (None: run the whole plan)
+    seed: int = 0
+    policy: Policy | None = None
+    robot: Any = None
+    observers: Sequence[EpisodeObserver] = ()  # they watch every episode (Rerun, dataset recording)
+    operator: OperatorConsole | None = None  # None: the robot stages and reports its own scene (a simulator)
+    fps: float | None = None  # control rate; None: as fast as the robot steps
+    max_steps: int = 200
+    max_episode_s: float | None = None
+    execute: Execute | None = None
+    output_dir: Path | None = None
+    resume: bool = False  # continue the run in `output_dir` from its journal
+    config: Mapping[str, Any] = field(default_factory=dict)  # written to config.json
+    labels: Mapping[str, Any] = field(default_factory=dict)  # e.g. strategy and policy, for the summary and logs
+    verbose: bool = False  # print a line per trial
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """What the summary and every episode's recording say about the run."""
+        return {
+            "task": self.task.name,
+            "strategy": self.labels.get("strategy"),
+            "policy": self.labels.get("policy", getattr(self.policy, "name", None)),
+            "robot": getattr(self.robot, "name", None),
+            "seed": self.seed,
+            "cost_unit": self.cost_model.unit,
+            "budget": self.budget,
+            "planned_trials": len(self.plan),
+        }
+
+
+@dataclass
+class Results:
+    """What `run` returns: every trial's record and the summary (also in the run directory, where there is one)."""
+
+    records: list[TrialRecord]
+    summary: dict[str, Any]
+    run_dir: Path | None = None
+
+
+@dataclass
+class LoopState:
+    """Where the evaluation stands: the scene the robot left behind and the effort spent so far."""
+
+    scene: Scene
+    cumulative_cost: float = 0.0
+    previous: Staged | None = None
+    next_index: int = 0
+
+    @classmethod
+    def resume(cls, records: list[TrialRecord], initial_scene: Scene) -> LoopState:
+        state = cls(scene=initial_scene, next_index=len(records))
+        for record in records:
+            state.previous = Staged(record.instance, record.staging)
+            if record.status in STAGED and record.scene_after is not None:
+                state.scene = record.scene_after
+                state.cumulative_cost = record.cumulative_cost
+        return state
+
+
+def run(evaluation: Evaluation) -> Results:
+    """Run the plan (from where its journal stopped, with `resume`) and write the results and summary, also
+    when it is interrupted (then marked incomplete)."""
+    ev = evaluation
+    run_dir = None if ev.output_dir is None else open_run_dir(Path(ev.output_dir), dict(ev.config), ev.resume)
+    records: list[TrialRecord] = [] if run_dir is None else run_dir.journal.records
+    state = LoopState.resume(records, ev.task.storage_scene())
+    if run_dir is not None:
+        write_plan(run_dir.path, ev.plan)
+        if records and ev.verbose:
+            spent = f"{state.cumulative_cost:.2f} {ev.cost_model.unit}"
+            print(f"resuming {run_dir.path} at trial {state.next_index} ({spent} spent)")
+    complete = False
+    try:
+        for record in trials(ev, state, _executor(ev)):
+            if run_dir is None:
+                records.append(record)
+            else:
+                run_dir.journal.append(record)
+            if ev.verbose:
+                print(trial_line(record, ev.cost_model.unit), flush=True)
+        complete = True
+    finally:
+        summary = summarize(records, settings=ev.settings, complete=complete)
+        if run_dir is not None:
+            _write(run_dir, records, summary, ev.settings)
+        for observer in ev.observers:
+            observer.close()
+    return Results(records, summary, None if run_dir is None else run_dir.path)
+
+
+def _executor(ev: Evaluation) -> Execute:
+    if ev.execute is not None:
+        return ev.execute
+    if ev.robot is None or ev.policy is None:
+        raise UserError("an Evaluation needs a robot and a policy, or `execute` to run each trial")
+    return RobotRunner(
+        ev.robot,
+        ev.policy,
+        ev.task,
+        operator=ev.operator,
+        fps=ev.fps,
+        max_steps=ev.max_steps,
+        max_episode_s=ev.max_episode_s,
+        observers=ev.observers,
+        cost_unit=ev.cost_model.unit,
+    )
+
+
+def _write(run_dir: RunDir, records: list[TrialRecord], summary: dict[str, Any], settings: dict[str, Any]) -> None:
+    write_results(run_dir.results_path, records, {k: str(v) for k, v in settings.items()})
+    run_dir.write_summary(summary)
+
+
+def preview(evaluation: Evaluation) -> list[TrialRecord]:
+    """The plan's trials as they would run if the robot left every scene exactly as it was staged (--dry_run)."""
+    state = LoopState(evaluation.task.storage_scene())
+    return list(trials(evaluation, state, assume_unchanged))
+
+
+def check_budget(evaluation: Evaluation) -> None:
+    """Refuse a budget that cannot pay for staging the first trial."""
+    ev, initial = evaluation, evaluation.task.storage_scene()
+    if ev.budget is None or not ev.plan:
+        return
+    unit = ev.cost_model.unit
+    if ev.budget <= 0:
+        raise BudgetError(f"--budget must be positive ({unit}), got {ev.budget}")
+    first = materialize(ev.plan[0], ev.task, initial, None, trial_rng(ev.seed, 0))
+    if first.instance is None:
+        return
+    cost = ev.cost_model(initial, first.instance.scene)
+    if ev.budget < cost:
+        raise BudgetError(
+            f"--budget {ev.budget:g} {unit} is below the cost of staging the first trial "
+            f"({cost:.2f} {unit}); raise --budget or drop it for no limit"
+        )
+
+
+def trials(evaluation: Evaluation, state: LoopState, execute: Execute) -> Iterator[TrialRecord]:
+    """Execute the plan from `state.next_index`, yielding one record per trial, until done or over budget."""
+    ev = evaluation
+    settings = ev.settings
+    for trial in ev.plan[state.next_index :]:
+        if exceeds_budget(state.cumulative_cost, ev.budget):
+            return
+        staged = materialize(trial, ev.task, state.scene, state.previous, trial_rng(ev.seed, trial.index))
+        state.previous = staged
+        state.next_index = trial.index + 1
+        if staged.instance is None:
+            yield _record(trial, ev.task, staged, None, 0.0, state.cumulative_cost, None)
+            continue
+        context = TrialContext(
+            index=trial.index,
+            instance=staged.instance,
+            base=trial.base,
+            current=state.scene,
+            planned_cost=ev.cost_model(state.scene, staged.instance.scene),
+            staging=staged.staging,
+            rng=np.random.default_rng([ev.seed, trial.index, 1]),
+            planned_trials=len(ev.plan),
+            axis=_axis(ev.task, trial.perturbation),
+            settings=settings,
+        )
+        started_at = datetime.now(UTC).isoformat(timespec="seconds")
+        outcome = execute(context)
+        cost = context.planned_cost if outcome.cost is None else outcome.cost
+        if outcome.status in STAGED:
+            state.cumulative_cost += cost
+            state.scene = outcome.scene_after
+        else:  # skipped: nothing was staged, so the next trial starts where this one would have
+            cost = 0.0
+        yield _record(trial, ev.task, staged, outcome, cost, state.cumulative_cost, started_at)
+
+
+def _axis(task: Task, perturbation: str | None) -> str | None:
+    return None if perturbation is None else task.perturbations.get(perturbation).axis
+
+
+def _record(
+    trial: PlannedTrial,
+    task: Task,
+    staged: Staged,
+    outcome: Outcome | None,
+    cost: float,
+    cumulative: float,
+    started_at: str | None,
+) -> TrialRecord:
+    """The journal's record of a trial; a perturbation that did not apply has no outcome."""
+    common = {
+        "index": trial.index,
+        "base_id": trial.base.id,
+        "perturbation": trial.perturbation,
+        "axis": _axis(task, trial.perturbation),
+        "repeat": trial.repeat,
+        "cost": cost,
+        "cumulative_cost": cumulative,
+    }
+    if outcome is None or staged.instance is None:
+        return TrialRecord(
+            **common, family=trial.base.family, staging="not_applicable", status="not_applicable", instance=None
+        )
+    return TrialRecord(
+        **common,
+        family=staged.instance.family,
+        staging=staged.staging,
+        status=outcome.status,
+        instance=staged.instance,
+        **score(outcome),
+        path_length=outcome.path_length,
+        reference_length=outcome.reference_length,
+        steps=outcome.steps,
+        duration_s=outcome.duration_s,
+        started_at=started_at,
+        scene_after=outcome.scene_after,
+        rerun_path=outcome.rerun_path,
+        dataset_episode=outcome.dataset_episode,
+        extra=dict(outcome.extra),
+    )
+
+
+def assume_unchanged(context: TrialContext) -> Outcome:
+    """A dry-run stand-in for execution: the robot leaves the scene exactly as it was staged."""
+    return Outcome(success=False, steps=0, path_length=0.0, scene_after=context.instance.scene, duration_s=0.0)

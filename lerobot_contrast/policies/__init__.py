@@ -1,0 +1,90 @@
+"""Every policy an evaluation can run, by name, behind one registry: the scripted baselines (each says the task
+it solves) and any LeRobot `PreTrainedPolicy`, loaded from --policy.path or from a checkpoint an entry names."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from importlib import import_module
+from typing import Any
+
+from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.policies.base import DEFAULT_POLICY, Builder, Policy, PolicyArgs, PolicyError
+
+PRETRAINED_BUILD = "lerobot_contrast.policies.pretrained:build"
+
+
+@dataclass(frozen=True)
+class PolicyEntry:
+    """A policy by name: how to build it ("module:function", imported only when it is built) and what it needs."""
+
+    name: str
+    build: str
+    summary: str
+    task: str | None = None  # the one task it solves (a scripted baseline reading that task's state); None: any
+    reads_images: bool = False  # whether the robot must render its cameras for it
+    path: str | None = None  # the LeRobot checkpoint a pretrained entry loads (a directory or a Hub repo id)
+
+    def builder(self) -> Builder:
+        module, _, function = self.build.partition(":")
+        return getattr(import_module(module), function)
+
+
+# --policy.path, or --policy.type naming a LeRobot policy type (act, diffusion, smolvla, ...) built fresh.
+LEROBOT = PolicyEntry("lerobot", PRETRAINED_BUILD, "a LeRobot PreTrainedPolicy", reads_images=True)
+
+POLICIES: dict[str, PolicyEntry] = {}
+
+
+def register(entry: PolicyEntry) -> None:
+    if entry.name in POLICIES or entry.name == LEROBOT.name:
+        raise ValueError(f"policy {entry.name!r} is registered twice")
+    POLICIES[entry.name] = entry
+
+
+for _entry in (
+    PolicyEntry(
+        "oracle",
+        "lerobot_contrast.policies.oracle:build",
+        "the scripted push oracle, with privileged block poses",
+        task="language_table",
+    ),
+    PolicyEntry("random", "lerobot_contrast.policies.scripted:build", "uniform random end-effector deltas"),
+    PolicyEntry(
+        "route_follower",
+        "lerobot_contrast.policies.route_follower:build",
+        "the scripted navigator following the shortest route",
+        task="vln",
+    ),
+):
+    register(_entry)
+
+
+def policy_entry(args: PolicyArgs) -> PolicyEntry:
+    """--policy.path is a LeRobot policy; --policy.type a registered policy, else a LeRobot policy type."""
+    if args.path is not None:
+        return LEROBOT
+    return POLICIES.get(args.type or DEFAULT_POLICY, LEROBOT)
+
+
+def make_policy(args: PolicyArgs, robot: Any, task: Task, rename_map: Mapping[str, str] | None = None) -> Policy:
+    """The policy `args` names, built for `robot` and `task`; a one-line PolicyError where it cannot run there."""
+    entry = policy_entry(args)
+    if entry.path is not None:
+        args = dataclasses.replace(args, path=entry.path)
+    return entry.builder()(args, robot, task, dict(rename_map or {}))
+
+
+__all__ = [
+    "DEFAULT_POLICY",
+    "LEROBOT",
+    "POLICIES",
+    "Policy",
+    "PolicyArgs",
+    "PolicyEntry",
+    "PolicyError",
+    "make_policy",
+    "policy_entry",
+    "register",
+]

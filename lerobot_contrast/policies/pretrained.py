@@ -1,0 +1,154 @@
+"""Any LeRobot `PreTrainedPolicy`, with its pre/post processors, as a policy the runner drives.
+
+The trial's instruction reaches the policy as `task`; `reset()` runs between trials. Features come from
+the robot (LeRobot's own `hw_to_dataset_features`), so a policy whose inputs the robot does not provide
+is refused up front, with the keys to map through `--rename_map`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import torch
+from lerobot.common.control_utils import predict_action
+from lerobot.configs import PreTrainedConfig
+from lerobot.policies import get_policy_class, make_policy_config, make_pre_post_processors
+from lerobot.policies.utils import make_robot_action
+from lerobot.utils.feature_utils import build_dataset_frame, dataset_to_policy_features, hw_to_dataset_features
+
+from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.policies.base import PolicyArgs, PolicyError
+
+
+class PolicyLoadError(PolicyError):
+    pass
+
+
+def build(args: PolicyArgs, robot: Any, task: Task, rename_map: Mapping[str, str]) -> PretrainedPolicy:
+    """--policy.path, or a LeRobot --policy.type built fresh with random weights."""
+    return PretrainedPolicy(robot, args.path, args.type, args.device, rename_map, args.use_amp)
+
+
+def robot_dataset_features(robot: Any) -> dict[str, dict]:
+    """The robot's features in LeRobot dataset form (`observation.state`, `observation.images.*`, `action`)."""
+    return {
+        **hw_to_dataset_features(robot.action_features, "action"),
+        **hw_to_dataset_features(robot.observation_features, "observation"),
+    }
+
+
+def _load_config(path: str, device: str | None) -> PreTrainedConfig:
+    try:
+        config = PreTrainedConfig.from_pretrained(path)
+    except Exception as error:
+        detail = " ".join(str(error).split())[:200]
+        raise PolicyLoadError(
+            f"--policy.path: cannot load a LeRobot policy config from {path!r} ({detail}); "
+            "give a directory written by save_pretrained or a Hub repo id"
+        ) from None
+    config.pretrained_path = Path(path) if Path(path).exists() else path
+    if device is not None:
+        config.device = device
+    return config
+
+
+def save_fresh_policy(robot: Any, policy_type: str, directory: Path, **overrides: Any) -> Path:
+    """A random-weight LeRobot policy shaped for `robot`, saved as `--policy.path` loads it (smoke tests, benchmarks)."""
+    features = robot_dataset_features(robot)
+    config = _fresh_config(policy_type, overrides.pop("device", None), features, **overrides)
+    policy = get_policy_class(config.type)(config)
+    preprocessor, postprocessor = make_pre_post_processors(config, dataset_stats=None)
+    for part in (policy, preprocessor, postprocessor):
+        part.save_pretrained(directory)
+    return directory
+
+
+def _fresh_config(
+    policy_type: str, device: str | None, features: dict[str, dict], **overrides: Any
+) -> PreTrainedConfig:
+    if device is not None:
+        overrides["device"] = device
+    try:
+        config = make_policy_config(policy_type, **overrides)
+    except ValueError as error:
+        raise PolicyLoadError(f"--policy.type: {' '.join(str(error).split())[:300]}") from None
+    if hasattr(config, "pretrained_backbone_weights"):  # a fresh policy is all random: fetch no vision backbone
+        config.pretrained_backbone_weights = None
+    policy_features = dataset_to_policy_features(features)
+    config.output_features = {k: v for k, v in policy_features.items() if k == "action"}
+    config.input_features = {k: v for k, v in policy_features.items() if k != "action"}
+    return config
+
+
+def _check_inputs(config: PreTrainedConfig, features: dict[str, dict], rename_map: Mapping[str, str]) -> None:
+    provided = {rename_map.get(key, key) for key in features if key != "action"}
+    missing = sorted(set(config.input_features) - provided)
+    if missing:
+        raise PolicyLoadError(
+            f"the policy expects {', '.join(missing)}, which the robot does not provide "
+            f"(it gives {', '.join(sorted(provided))}); map robot keys to them with "
+            '--rename_map=\'{"observation.images.ROBOT_CAMERA": "POLICY_KEY"}\''
+        )
+
+
+class PretrainedPolicy:
+    """A LeRobot policy loaded from `--policy.path` (or built fresh from `--policy.type`) for one robot."""
+
+    def __init__(
+        self,
+        robot: Any,
+        path: str | None = None,
+        policy_type: str | None = None,
+        device: str | None = None,
+        rename_map: Mapping[str, str] | None = None,
+        use_amp: bool = False,
+    ) -> None:
+        self.features = robot_dataset_features(robot)
+        self.robot_type = robot.robot_type
+        rename_map = dict(rename_map or {})
+        if path is not None:
+            config = _load_config(path, device)
+        else:
+            config = _fresh_config(str(policy_type), device, self.features)
+        _check_inputs(config, self.features, rename_map)
+        policy_class = get_policy_class(config.type)
+        if path is not None:
+            self.policy = policy_class.from_pretrained(path, config=config)
+        else:
+            self.policy = policy_class(config)
+        self.policy.to(config.device).eval()
+        overrides = {"device_processor": {"device": str(config.device)}}
+        if rename_map:
+            overrides["rename_observations_processor"] = {"rename_map": rename_map}
+        self.preprocessor, self.postprocessor = make_pre_post_processors(
+            config,
+            pretrained_path=path,
+            **({"preprocessor_overrides": overrides} if path is not None else {}),
+        )
+        self.name = config.type
+        self.device = torch.device(config.device)
+        self.use_amp = use_amp
+        self.instruction = ""
+
+    def reset(self, context: TrialContext) -> None:
+        self.instruction = context.instance.instruction
+        self.policy.reset()
+        self.preprocessor.reset()
+        self.postprocessor.reset()
+
+    def act(self, observation: Mapping[str, Any]) -> dict[str, float]:
+        frame = build_dataset_frame(self.features, dict(observation), prefix="observation")
+        action = predict_action(
+            frame,
+            self.policy,
+            self.device,
+            self.preprocessor,
+            self.postprocessor,
+            self.use_amp,
+            task=self.instruction,
+            robot_type=self.robot_type,
+        )
+        return make_robot_action(action, self.features)

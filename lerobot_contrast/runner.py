@@ -1,0 +1,280 @@
+"""Execute trials on any LeRobot robot: stage the scene, run the policy at a fixed rate, judge or label the outcome.
+
+With an operator console, a person stages each scene, may end or emergency-stop the episode, and labels
+it. Without one (`--operator=auto`), the robot must implement `SceneIO`: the runner stages scenes and
+judges outcomes from the scene itself, as in simulation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Sequence
+from contextlib import suppress
+from dataclasses import dataclass
+from typing import Any
+
+from lerobot.utils.robot_utils import precise_sleep
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.contrast.staging import reports_scene
+from lerobot_contrast.contrast.task import Judgement, Task
+from lerobot_contrast.contrast.trial import Outcome, TrialContext
+from lerobot_contrast.operator_console import Label, OperatorConsole, SessionStopped, Staging
+from lerobot_contrast.policies.base import Policy
+from lerobot_contrast.record.observer import EpisodeObserver
+
+# How an episode can end without a label: the operator stopped the robot, or the robot went away.
+ABORTS = ("estop", "disconnected")
+
+
+class RobotLostError(UserError):
+    pass
+
+
+@dataclass
+class Episode:
+    steps: int
+    path: list[Pose]
+    duration_s: float
+    ended_by: str  # predicate | success | failure | policy | max_steps | max_time | estop | disconnected
+
+
+class RobotRunner:
+    def __init__(
+        self,
+        robot: Any,
+        policy: Policy,
+        task: Task,
+        *,
+        operator: OperatorConsole | None,
+        fps: float | None,
+        max_steps: int,
+        max_episode_s: float | None = None,
+        observers: Sequence[EpisodeObserver] = (),
+        cost_unit: str = "m",
+        reconnect_attempts: int = 3,
+        reconnect_wait_s: float = 1.0,
+    ) -> None:
+        self.scene_io = reports_scene(robot, task.storage_scene().objects)
+        if operator is None and not self.scene_io:
+            raise UserError(
+                f"--operator=auto needs a robot that reports and stages its scene; {robot.name} cannot, "
+                "so use --operator=console"
+            )
+        self.robot, self.policy, self.task, self.operator = robot, policy, task, operator
+        self.period = 1.0 / fps if fps else 0.0
+        self.max_steps, self.max_episode_s = max_steps, max_episode_s
+        self.observers = list(observers)
+        self.cost_unit = cost_unit
+        self.reconnect_attempts, self.reconnect_wait_s = reconnect_attempts, reconnect_wait_s
+        self.pose_keys: tuple[str, str] | None = getattr(robot, "pose_keys", None)
+        # Episodes end once the scene shows the goal, as the benchmark's do, where the scene can be read.
+        self.stop_on_goal = self.scene_io and task.outcome == "predicate"
+        # Why the session cannot go on (robot lost, operator stopped after an abort), raised at the next trial
+        # so that the trial that ended this way is journalled first.
+        self._halt: Exception | None = None
+
+    def __call__(self, context: TrialContext) -> Outcome:
+        if self._halt is not None:
+            raise self._halt
+        while True:
+            staging = self._stage(context)
+            if staging.action == "stop":
+                raise SessionStopped("the operator stopped the session")
+            if staging.action == "skip":
+                return _skipped(context)
+            episode = self._run_episode(context)
+            if episode.ended_by in ABORTS:
+                return self._aborted(context, staging, episode)
+            scene_after = self._scene_after(context, episode)
+            label = self._label(context, episode, scene_after)
+            if label.action == "done":
+                return self._finish(context, staging, episode, scene_after, label)
+            for observer in self.observers:
+                observer.discard()
+            if label.action == "skip":
+                return _skipped(context)
+            if label.action == "stop":
+                raise SessionStopped("the operator stopped the session")
+
+    def _stage(self, context: TrialContext) -> Staging:
+        staging = Staging("ready") if self.operator is None else self.operator.stage(context)
+        if staging.action == "ready" and self.scene_io:  # in simulation the "operator's hands" place the objects
+            self.robot.stage_scene(context.instance.scene)
+        return staging
+
+    def _run_episode(self, context: TrialContext) -> Episode:
+        self.policy.reset(context)
+        features = {"observation": self.robot.observation_features, "action": self.robot.action_features}
+        for observer in self.observers:
+            observer.start(context, features, self.pose_keys)
+        if self.operator is not None:
+            self.operator.running()
+        start = time.perf_counter()
+        steps, path, ended_by = 0, [], "max_steps"
+        try:
+            observation = self.robot.get_observation()
+            self._extend(path, observation)
+            while steps < self.max_steps:
+                tick = time.perf_counter()
+                ended_by = self._interrupted(tick - start, observation)
+                if ended_by is not None:
+                    break
+                sent = self.robot.send_action(self.policy.act(observation))
+                for observer in self.observers:
+                    observer.step(tick - start, observation, sent)
+                steps += 1
+                observation = self.robot.get_observation()
+                self._extend(path, observation)
+                ended_by = self._finished(context)
+                if ended_by is not None:
+                    break
+                precise_sleep(self.period - (time.perf_counter() - tick))
+            else:
+                ended_by = "max_steps"
+        except (ConnectionError, TimeoutError) as error:
+            ended_by = "disconnected"
+            self._recover(error)
+        return Episode(steps, path, time.perf_counter() - start, ended_by)
+
+    def _interrupted(self, elapsed: float, observation: dict[str, Any]) -> str | None:
+        if self.max_episode_s is not None and elapsed >= self.max_episode_s:
+            return "max_time"
+        key = None if self.operator is None else self.operator.answers.take_key()
+        if key == "estop":
+            self._hold(observation)
+        return key
+
+    def _finished(self, context: TrialContext) -> str | None:
+        # A policy (or a robot, for a discrete "stop" action) can end its own episode, as VLN agents do.
+        if getattr(self.policy, "done", False) or getattr(self.robot, "stop_requested", False):
+            return "policy"
+        if self.stop_on_goal and self.task.is_achieved(context.instance, self.robot.read_scene()):
+            return "predicate"
+        return None
+
+    def _extend(self, path: list[Pose], observation: dict[str, Any]) -> None:
+        if self.pose_keys is not None:
+            x, y = self.pose_keys
+            path.append(Pose(float(observation[x]), float(observation[y])))
+
+    def _hold(self, observation: dict[str, Any]) -> None:
+        """Stop at once: zero every velocity or delta, and hold every position where it is now."""
+        hold = {
+            key: float(observation[key]) if key.endswith(".pos") and key in observation else 0.0
+            for key in self.robot.action_features
+        }
+        self.robot.send_action(hold)
+
+    def _recover(self, error: Exception) -> None:
+        """After a lost connection: try to stop the robot, then to reconnect; record why not if it fails."""
+        # The link is probably down already; these are best effort, reconnecting is what matters.
+        with suppress(Exception):
+            self.robot.send_action(dict.fromkeys(self.robot.action_features, 0.0))
+        with suppress(Exception):
+            self.robot.disconnect()
+        for _ in range(self.reconnect_attempts):
+            try:
+                self.robot.connect()
+                return
+            except Exception as reconnect_error:
+                error = reconnect_error
+                time.sleep(self.reconnect_wait_s)
+        self._halt = RobotLostError(
+            f"the robot ({self.robot.name}) disconnected and could not reconnect ({' '.join(str(error).split())}); "
+            "check it, then continue the run"
+        )
+
+    def _scene_after(self, context: TrialContext, episode: Episode) -> Scene:
+        if self.scene_io:
+            return self.robot.read_scene()
+        robot = episode.path[-1] if episode.path else context.instance.scene.robot
+        return Scene(dict(context.instance.scene.objects), robot)  # objects assumed where they were staged
+
+    def _label(self, context: TrialContext, episode: Episode, scene_after: Scene) -> Label:
+        instance = context.instance
+        judgement: Judgement | None = None
+        if self.scene_io and self.task.outcome != "label":
+            judgement = self.task.judge(instance, episode.path, scene_after)
+        if self.operator is None:
+            assert judgement is not None
+            progress = judgement.progress if judgement.progress is not None else float(judgement.success)
+            return Label("done", judgement.success, progress)
+        early = episode.ended_by if episode.ended_by in ("success", "failure") else None
+        return self.operator.label(self.task.subgoals(instance), judgement, early)
+
+    def _cost(self, staging: Staging) -> float | None:
+        if self.operator is None:
+            return None
+        if self.cost_unit == "s":
+            return staging.reset_s
+        return staging.moved
+
+    def _finish(
+        self, context: TrialContext, staging: Staging, episode: Episode, scene_after: Scene, label: Label
+    ) -> Outcome:
+        outcome = Outcome(
+            success=label.success,
+            steps=episode.steps,
+            path_length=_length(episode.path),
+            scene_after=scene_after,
+            duration_s=episode.duration_s,
+            progress=label.progress,
+            reference_length=self.task.reference_length(context.instance),
+            cost=self._cost(staging),
+            extra=self._extra(context, staging, episode),
+        )
+        return self._recorded(context, outcome)
+
+    def _aborted(self, context: TrialContext, staging: Staging, episode: Episode) -> Outcome:
+        # After a lost link the scene is unknown (a restarted simulator is empty): assume it is as staged.
+        scene_after = context.instance.scene
+        if self.scene_io and episode.ended_by == "estop":
+            scene_after = self.robot.read_scene()
+        outcome = Outcome(
+            success=False,
+            steps=episode.steps,
+            path_length=_length(episode.path),
+            scene_after=scene_after,
+            duration_s=episode.duration_s,
+            status="aborted",
+            cost=self._cost(staging),
+            extra=self._extra(context, staging, episode),
+        )
+        asked = self.operator is not None and self._halt is None and episode.ended_by == "estop"
+        if asked and self.operator.aborted("emergency stop").action == "stop":
+            self._halt = SessionStopped("the operator stopped the session after an emergency stop")
+        return self._recorded(context, outcome)
+
+    def _extra(self, context: TrialContext, staging: Staging, episode: Episode) -> dict[str, Any]:
+        extra: dict[str, Any] = {
+            "ended_by": episode.ended_by,
+            **{k: v for k, v in self.task.path_metrics(context.instance, episode.path).items() if v is not None},
+        }
+        if self.operator is not None:
+            extra["reset_s"] = round(staging.reset_s, 3)
+            if staging.moved is not None:
+                extra["moved_reported"] = staging.moved
+        return extra
+
+    def _recorded(self, context: TrialContext, outcome: Outcome) -> Outcome:
+        cost = context.planned_cost if outcome.cost is None else outcome.cost
+        rerun_path, dataset_episode = None, None
+        for observer in self.observers:
+            files = observer.end(outcome, cost)
+            rerun_path = files.rerun_path or rerun_path
+            dataset_episode = files.dataset_episode if files.dataset_episode is not None else dataset_episode
+        return dataclasses.replace(outcome, rerun_path=rerun_path, dataset_episode=dataset_episode)
+
+
+def _skipped(context: TrialContext) -> Outcome:
+    return Outcome(
+        success=False, steps=0, path_length=0.0, scene_after=context.current, duration_s=0.0, status="skipped"
+    )
+
+
+def _length(path: list[Pose]) -> float:
+    return sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(path, path[1:], strict=False))

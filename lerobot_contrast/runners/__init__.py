@@ -1,1 +1,0 @@
-"""Runners: how a trial is executed (in a gymnasium simulator, or on a LeRobot robot)."""

@@ -1,1 +1,0 @@
-"""The Language-Table-compatible tabletop: pymunk physics, benchmark-camera renderer, gymnasium env, push oracle."""

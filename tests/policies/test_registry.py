@@ -1,0 +1,49 @@
+"""Every policy comes from one registry: scripted baselines say their task, and a LeRobot checkpoint is one entry."""
+
+import numpy as np
+import pytest
+
+from lerobot_contrast import PolicyArgs, TrialContext, load_task, make_policy
+from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
+from lerobot_contrast.policies import LEROBOT, POLICIES, PRETRAINED_BUILD, PolicyEntry, PolicyError, policy_entry
+from lerobot_contrast.policies.pretrained import PretrainedPolicy
+from tests.lerobot_helpers import save_act
+
+
+def test_scripted_baselines_are_registered_with_the_task_they_solve():
+    assert {name: entry.task for name, entry in POLICIES.items()} == {
+        "oracle": "language_table",
+        "random": None,
+        "route_follower": "vln",
+    }
+    assert policy_entry(PolicyArgs()).name == "oracle"
+    assert policy_entry(PolicyArgs(path="user/model")) is LEROBOT
+    assert policy_entry(PolicyArgs(type="act")) is LEROBOT  # a LeRobot policy type, built fresh
+
+
+def test_a_policy_that_does_not_fit_the_task_is_refused_in_one_line():
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    with pytest.raises(PolicyError, match="--policy.type=route_follower navigates --task=vln"):
+        make_policy(PolicyArgs(type="route_follower"), robot, load_task("language_table"))
+
+
+def test_a_registered_checkpoint_loads_as_a_lerobot_policy(tmp_path, monkeypatch):
+    path = save_act(tmp_path / "model")
+    entry = PolicyEntry(
+        "shipped_act", PRETRAINED_BUILD, "an ACT shipped as a directory", reads_images=True, path=str(path)
+    )
+    monkeypatch.setitem(POLICIES, entry.name, entry)
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    policy = make_policy(PolicyArgs(type="shipped_act", device="cpu"), robot, load_task("language_table"))
+    assert isinstance(policy, PretrainedPolicy) and policy.name == "act"
+    robot.connect()
+    try:
+        task = load_task("language_table")
+        instance = task.sample(1, np.random.default_rng(0))[0]
+        robot.stage_scene(instance.scene)
+        context = TrialContext(0, instance, instance, instance.scene, 0.0, "reset", np.random.default_rng(0), 1)
+        policy.reset(context)
+        assert set(policy.act(robot.get_observation())) == {"delta_x", "delta_y"}
+    finally:
+        robot.disconnect()
