@@ -114,7 +114,12 @@ def _full_disk(self, folder, *args, **kwargs):
 
 # (case, checkpoint, OUT_DIR, what the one line must say); the checkpoint is written to tmp_path / "ckpt"
 FILES_AND_PATHS = [
-    ("nested 990 deep", lambda t, v: _file(t, b"\x81\xa6params" + b"\x81\xa1a" * 990 + b"\x01"), "out", "is the int 1"),
+    (
+        "nested 990 deep",
+        lambda t, v: _file(t, b"\x81\xa6params" + b"\x81\xa1a" * 990 + b"\x01"),
+        "out",
+        "nests deeper than 32 levels",
+    ),
     ("integer top-level key", _int_key, "out", "unexpected top-level checkpoint entries ['7']"),
     ("cut short", lambda t, v: _file(t, _checkpoint(t, v).read_bytes()[:-100]), "out", "is the file complete?"),
     ("nested 1200 deep", lambda t, v: _file(t, b"\x81\xa1a" * 1200 + b"\x01"), "out", "checkpoint (StackError)"),

@@ -16,6 +16,8 @@ import numpy as np
 
 EXT_NDARRAY, EXT_COMPLEX, EXT_NPSCALAR = 1, 2, 3
 NUMERIC_KINDS = "biufc"
+# The released parameter tree is 8 levels deep; far deeper nesting is damage, and its paths would make unreadable errors.
+MAX_DEPTH = 32
 
 
 DAMAGED = "the checkpoint is damaged or not a Language-Table BC checkpoint; convert an intact one"
@@ -120,13 +122,15 @@ def flat_weights(tree: Any, name: str) -> dict[str, np.ndarray]:
     if not isinstance(tree, dict):
         raise CheckpointError(f"{name} is a {type(tree).__name__}, not a tree of named weights: {DAMAGED}")
     flat: dict[str, np.ndarray] = {}
-    todo = [(name, tree)]
+    todo = [(name, tree, 1)]
     while todo:  # a loop, not recursion: msgpack nests 1,000 deep, as deep as Python's recursion limit
-        prefix, node = todo.pop()
+        prefix, node, depth = todo.pop()
+        if depth > MAX_DEPTH:
+            raise CheckpointError(f"{prefix[:80]}... nests deeper than {MAX_DEPTH} levels: {DAMAGED}")
         for key, value in node.items():
             path = f"{prefix}/{key}"
             if isinstance(value, dict):
-                todo.append((path, value))
+                todo.append((path, value, depth + 1))
             else:
                 flat[path] = _weights(path, value)
     return dict(sorted(flat.items()))
