@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.metrics import METRICS
 from lerobot_contrast.record.hub import parse_hub_spec
 from lerobot_contrast.reporting import build_report, load_run
-from lerobot_contrast.reporting.stats import METRICS
 
 
 class ReportArgsError(UserError):

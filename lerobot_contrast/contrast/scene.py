@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -54,3 +54,11 @@ class Scene:
             objects={name: Pose.from_json(p) for name, p in data["objects"].items()},
             robot=None if robot is None else Pose.from_json(robot),
         )
+
+
+def distance_to_segment(p: Sequence[float], a: Sequence[float], b: Sequence[float]) -> float:
+    """Distance from point `p` to the segment from `a` to `b` (planar points, metres)."""
+    ax, ay = b[0] - a[0], b[1] - a[1]
+    length2 = ax * ax + ay * ay
+    t = 0.0 if length2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * ax + (p[1] - a[1]) * ay) / length2))
+    return math.dist((float(p[0]), float(p[1])), (float(a[0] + t * ax), float(a[1] + t * ay)))

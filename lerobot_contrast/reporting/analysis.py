@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from lerobot_contrast.contrast.metrics import METRICS
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.runs import Group, Run, reference_for
 
@@ -47,7 +48,7 @@ def summary_row(label: str, seeds: str, df: pd.DataFrame, runs: list[Run]) -> Su
     """Counts, mean total cost per run, trials per unit cost, and every metric with its interval."""
     cost = float(np.mean([stats.total_cost(r.results) for r in runs]))
     per_cost = float(np.mean([stats.trials_per_unit_cost(r.results) for r in runs]))
-    estimates = {m: stats.metric_estimate(df, m, rng()) for m in stats.METRICS}
+    estimates = {m: stats.metric_estimate(df, m, rng()) for m in METRICS}
     return SummaryRow(label, seeds, stats.status_counts(df), cost, per_cost, estimates)
 
 
@@ -141,7 +142,7 @@ class Comparison:
 
 def comparisons(pairs: list[tuple[Run, Run]]) -> list[Comparison]:
     return [
-        Comparison(a, b, {m: stats.paired_difference(a.results, b.results, m, rng()) for m in stats.METRICS})
+        Comparison(a, b, {m: stats.paired_difference(a.results, b.results, m, rng()) for m in METRICS})
         for a, b in pairs
     ]
 

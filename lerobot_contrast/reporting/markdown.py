@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from lerobot_contrast.contrast.metrics import METRICS
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.analysis import Comparison, SummaryRow, VersusFull
@@ -32,10 +33,10 @@ def fmt(e: stats.Estimate | None, with_n: bool = False) -> str:
 
 def summary_section(rows: list[SummaryRow], unit: str) -> list[str]:
     header = ["run", "seed", "trials", "n/a", "aborted", "skipped", f"cost ({unit})", f"trials per {unit}"]
-    header += [METRIC_NAMES[m] for m in stats.METRICS]
+    header += [METRIC_NAMES[m] for m in METRICS]
     body = [
         [r.label, r.seeds, *(str(r.counts[s]) for s in stats.STATUSES), f"{r.cost:.1f}", f"{r.trials_per_cost:.2f}"]
-        + [fmt(r.estimates[m]) for m in stats.METRICS]
+        + [fmt(r.estimates[m]) for m in METRICS]
         for r in rows
     ]
     used = sorted({e.method for r in rows for e in r.estimates.values() if e.method in METHODS})
@@ -96,11 +97,11 @@ def comparison_section(items: list[Comparison]) -> list[str]:
         "Mean per-trial difference (first minus second) over trials with the same instance id done by both, with a cluster bootstrap interval over base instances.",
         "",
     ]
-    header = ["first", "second", "paired trials", *(f"Δ {METRIC_NAMES[m]}" for m in stats.METRICS)]
+    header = ["first", "second", "paired trials", *(f"Δ {METRIC_NAMES[m]}" for m in METRICS)]
     body = []
     for c in items:
         n = max(e.n_trials for e in c.differences.values())
-        body.append([f"{c.a.name}", f"{c.b.name}", str(n), *(fmt(c.differences[m]) for m in stats.METRICS)])
+        body.append([f"{c.a.name}", f"{c.b.name}", str(n), *(fmt(c.differences[m]) for m in METRICS)])
     return lines + [*table(header, body), ""]
 
 

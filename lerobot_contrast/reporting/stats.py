@@ -6,6 +6,7 @@ Every function takes the results table as a DataFrame (see `frame`); only trials
 
 from __future__ import annotations
 
+import typing
 import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -15,11 +16,10 @@ import pandas as pd
 import pyarrow as pa
 from scipy import stats as distributions
 
-from lerobot_contrast.contrast.trial import TrialRecord
+from lerobot_contrast.contrast.trial import Status, TrialRecord
 from lerobot_contrast.record.results import SCHEMA, record_row
 
-METRICS = ("success", "spl", "progress")
-STATUSES = ("done", "not_applicable", "aborted", "skipped")
+STATUSES: tuple[Status, ...] = typing.get_args(Status)
 CONFIDENCE = 0.95
 N_BOOT = 2000
 Z95 = float(distributions.norm.ppf(0.5 + CONFIDENCE / 2))

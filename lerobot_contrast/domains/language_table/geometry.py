@@ -111,10 +111,3 @@ def sample_free_pose(
         a = rng.uniform(0.0, 2 * math.pi)
         pose = Pose(float(center[0] + r * math.cos(a)), float(center[1] + r * math.sin(a)), yaw)
     return pose if placement_ok(scene, name, pose) else None
-
-
-def distance_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    ab = b - a
-    denom = float(ab @ ab)
-    t = 0.0 if denom == 0.0 else min(1.0, max(0.0, float((p - a) @ ab) / denom))
-    return float(np.linalg.norm(p - (a + t * ab)))

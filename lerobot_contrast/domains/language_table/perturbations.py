@@ -11,10 +11,10 @@ import numpy as np
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
-from lerobot_contrast.contrast.scene import Scene
+from lerobot_contrast.contrast.scene import Scene, distance_to_segment
 from lerobot_contrast.domains.language_table import board, synonyms
 from lerobot_contrast.domains.language_table import families as fam
-from lerobot_contrast.domains.language_table.geometry import distance_to_segment, sample_free_pose, xy
+from lerobot_contrast.domains.language_table.geometry import sample_free_pose, xy
 from lerobot_contrast.domains.language_table.wording import flip_words, render, sample_words
 
 # A moved block travels at least this far, so the change is one a person (and the policy) notices,

@@ -109,10 +109,3 @@ def straight_line(goal: Mapping[str, Any], scene: Scene, regions: Mapping[str, R
     if len(points) < 2:
         return None
     return sum(math.dist(a, b) for a, b in zip(points, points[1:], strict=False))
-
-
-def distance_to_segment(p: Point, a: Point, b: Point) -> float:
-    ax, ay = b[0] - a[0], b[1] - a[1]
-    length2 = ax * ax + ay * ay
-    t = 0.0 if length2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * ax + (p[1] - a[1]) * ay) / length2))
-    return math.dist(p, (a[0] + t * ax, a[1] + t * ay))

@@ -15,8 +15,8 @@ import numpy as np
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbFn
-from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.domains.task_file.goals import distance_to_segment, goal_object, involved, waypoints
+from lerobot_contrast.contrast.scene import Pose, Scene, distance_to_segment
+from lerobot_contrast.domains.task_file.goals import goal_object, involved, waypoints
 from lerobot_contrast.domains.task_file.schema import TaskSpec, Template
 from lerobot_contrast.domains.task_file.wording import pick, substitute
 from lerobot_contrast.domains.task_file.world import free_pose

@@ -13,7 +13,7 @@ from lerobot_contrast.contrast.task import perturb
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.domains.task_file import load_task_file
 from lerobot_contrast.domains.task_file.goals import involved
-from tests.tasks.task_file_fixtures import CUPS, write
+from tests.domains.task_file.task_file_fixtures import CUPS, write
 
 EXAMPLES = ("so101_blocks", "lekiwi_fetch")
 
@@ -117,8 +117,8 @@ def test_move_goal_object_moves_the_subject_out_of_the_way_of_its_goal(cups):
 def test_custom_perturbations_load_by_module_function_with_params_and_the_task(tmp_path):
     text = CUPS.replace(
         "  - {name: SB, kind: move_goal_object}\n",
-        "  - {name: L2, axis: L, function: 'tests.tasks.task_file_fixtures:louder', params: {suffix: ', please'}}\n"
-        "  - {name: LB2, axis: LB, function: 'tests.tasks.task_file_fixtures:other_cup'}\n",
+        "  - {name: L2, axis: L, function: 'tests.domains.task_file.task_file_fixtures:louder', params: {suffix: ', please'}}\n"
+        "  - {name: LB2, axis: LB, function: 'tests.domains.task_file.task_file_fixtures:other_cup'}\n",
     )
     task = load_task_file(write(tmp_path, text))
     base, rng = hand_built(task), np.random.default_rng(0)

@@ -15,7 +15,7 @@ from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.strategy import make_plan
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.domains.task_file import example_names, examples_dir, load_task_file
-from tests.tasks.task_file_fixtures import CUPS, LISTED, write
+from tests.domains.task_file.task_file_fixtures import CUPS, LISTED, write
 
 EXAMPLES = ("so101_blocks", "lekiwi_fetch")
 

@@ -11,7 +11,7 @@ import pytest
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.domains.task_file import TaskFileError, load_task_file, task_from_dict
-from tests.tasks.task_file_fixtures import CUPS, LISTED, write
+from tests.domains.task_file.task_file_fixtures import CUPS, LISTED, write
 
 # (replacements applied to CUPS, text on the line the error must name, expected message fragment)
 CASES = {
@@ -141,24 +141,29 @@ CASES = {
         [
             (
                 "{name: SB, kind: move_goal_object}",
-                "{name: SB, axis: SB, function: 'tests.tasks.task_file_fixtures:nope'}",
+                "{name: SB, axis: SB, function: 'tests.domains.task_file.task_file_fixtures:nope'}",
             )
         ],
         "name: SB",
-        "module 'tests.tasks.task_file_fixtures' has no function 'nope'",
+        "module 'tests.domains.task_file.task_file_fixtures' has no function 'nope'",
     ),
     "custom function without its params": (
         [
             (
                 "{name: SB, kind: move_goal_object}",
-                "{name: SB, axis: L, function: 'tests.tasks.task_file_fixtures:louder'}",
+                "{name: SB, axis: L, function: 'tests.domains.task_file.task_file_fixtures:louder'}",
             )
         ],
         "name: SB",
         "louder() must accept (instance, rng, **params)",
     ),
     "custom function without an axis": (
-        [("{name: SB, kind: move_goal_object}", "{name: SB, function: 'tests.tasks.task_file_fixtures:louder'}")],
+        [
+            (
+                "{name: SB, kind: move_goal_object}",
+                "{name: SB, function: 'tests.domains.task_file.task_file_fixtures:louder'}",
+            )
+        ],
         "name: SB",
         "perturbations[3]: missing key 'axis'",
     ),

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+README = Path(__file__).resolve().parents[3] / "README.md"
 BLOCKS = re.findall(r"```(yaml|python)\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
 MY_TABLE = next(code for kind, code in BLOCKS if kind == "yaml" and "name: my_table" in code)
 EXAMPLE = next(code for kind, code in BLOCKS if kind == "python" and 'load_task("my_table.yaml")' in code)
