@@ -6,7 +6,7 @@ import importlib
 import pkgutil
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from lerobot_contrast.config import ConfigError, EvalConfig
 from lerobot_contrast.contrast.staging import reports_scene
@@ -14,6 +14,9 @@ from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.operator_console import Answers, OperatorConsole
 from lerobot_contrast.policies import policy_entry
 from lerobot_contrast.record.observer import EpisodeObserver
+
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
 
 # The robot each task runs on when no --robot is given: a simulator, or the LoCoBot host's sim backend.
 TASK_ROBOTS = {"language_table": "language_table_sim", "vln": "locobot"}
@@ -84,7 +87,7 @@ def make_robot(cfg: EvalConfig) -> Any:
         ) from None
 
 
-def make_observers(cfg: EvalConfig, task: Any, robot: Any, run_dir: Path) -> list[EpisodeObserver]:
+def make_observers(cfg: EvalConfig, task: Task, robot: Robot, run_dir: Path) -> list[EpisodeObserver]:
     observers: list[EpisodeObserver] = []
     if cfg.rerun:
         from lerobot_contrast.record.rerun_log import RerunEpisodeRecorder
@@ -98,7 +101,7 @@ def make_observers(cfg: EvalConfig, task: Any, robot: Any, run_dir: Path) -> lis
     return observers
 
 
-def make_operator(cfg: EvalConfig, robot: Any, task: Task, unit: str) -> OperatorConsole | None:
+def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> OperatorConsole | None:
     """The operator console that stages and labels each trial, or None where the robot does it (--operator=auto)."""
     scene_io = reports_scene(robot, task.storage_scene().objects)
     mode = cfg.operator or ("auto" if scene_io else "console")
@@ -112,7 +115,7 @@ def make_operator(cfg: EvalConfig, robot: Any, task: Task, unit: str) -> Operato
     return OperatorConsole(Answers(sys.stdin), unit=unit) if mode == "console" else None
 
 
-def run_fps(cfg: EvalConfig, robot: Any) -> float | None:
+def run_fps(cfg: EvalConfig, robot: Robot) -> float | None:
     """Simulated robots step as fast as they can unless asked for a rate; hardware runs at a fixed one."""
     if cfg.fps is not None:
         return cfg.fps

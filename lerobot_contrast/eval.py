@@ -7,7 +7,7 @@ import json
 import sys
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +33,9 @@ from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
 from lerobot_contrast.record.summary import format_summary
 from lerobot_contrast.runner import RobotLostError
+
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
 
 
 def validate(cfg: EvalConfig) -> None:
@@ -88,7 +91,7 @@ def adopt_plan(cfg: EvalConfig) -> Path:
     return source
 
 
-def connect(robot: Any) -> None:
+def connect(robot: Robot) -> None:
     try:
         robot.connect()
     except Exception as error:

@@ -7,7 +7,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,6 +29,9 @@ from lerobot_contrast.record.run_dir import RunDir, open_run_dir
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.runner import RobotRunner
 
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
+
 Execute = Callable[[TrialContext], Outcome]
 # Trials whose staging was paid for: the scene they left behind is where the next one starts.
 STAGED = ("done", "aborted")
@@ -49,7 +52,7 @@ class Evaluation:
     budget: float | None = None  # stop once the cumulative cost exceeds it (None: run the whole plan)
     seed: int = 0
     policy: Policy | None = None
-    robot: Any = None
+    robot: Robot = None
     observers: Sequence[EpisodeObserver] = ()  # they watch every episode (Rerun, dataset recording)
     operator: OperatorConsole | None = None  # None: the robot stages and reports its own scene (a simulator)
     fps: float | None = None  # control rate; None: as fast as the robot steps

@@ -13,7 +13,7 @@ import time
 from collections.abc import Sequence
 from contextlib import suppress
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from lerobot.utils.robot_utils import precise_sleep
 
@@ -25,6 +25,9 @@ from lerobot_contrast.contrast.trial import Outcome, TrialContext
 from lerobot_contrast.operator_console import Label, OperatorConsole, SessionStopped, Staging
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver
+
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
 
 # How an episode can end without a label: the operator stopped the robot, or the robot went away.
 ABORTS = ("estop", "disconnected")
@@ -45,7 +48,7 @@ class Episode:
 class RobotRunner:
     def __init__(
         self,
-        robot: Any,
+        robot: Robot,
         policy: Policy,
         task: Task,
         *,

@@ -130,43 +130,43 @@ def test_dry_run_prints_the_staging_and_writes_nothing(tmp_path, capsys):
         (["--robot.type=so102_follower"], "--robot.type=so102_follower is not a known robot; known: bi_openarm"),
     ],
 )
-def test_bad_input_gets_one_line_naming_the_flag(args, message):
-    result = cli(*args, "--dry_run=true")
-    assert result.returncode == 2
-    assert result.stderr.count("\n") == 1 and message in result.stderr, result.stderr
-    assert "Traceback" not in result.stderr
+def test_bad_input_gets_one_line_naming_the_flag(args, message, capsys):
+    assert main([*args, "--dry_run=true"]) == 2
+    stderr = capsys.readouterr().err
+    assert stderr.count("\n") == 1 and message in stderr, stderr
 
 
-def test_a_list_flag_takes_a_bare_comma_list_as_well_as_brackets():
-    plans = [cli("--n_instances=2", f"--perturbations={value}", "--dry_run=true") for value in ("LB1,SB2", "[LB1,SB2]")]
-    assert plans[0].returncode == 0, plans[0].stderr
-    assert plans[0].stdout == plans[1].stdout
-    assert "ΔSB2" in plans[0].stdout and "ΔLB2" not in plans[0].stdout
+def test_a_list_flag_takes_a_bare_comma_list_as_well_as_brackets(capsys):
+    plans = []
+    for value in ("LB1,SB2", "[LB1,SB2]"):
+        assert main(["--n_instances=2", f"--perturbations={value}", "--dry_run=true"]) == 0
+        plans.append(capsys.readouterr().out)
+    assert plans[0] == plans[1]
+    assert "ΔSB2" in plans[0] and "ΔLB2" not in plans[0]
 
 
-def test_lerobots_own_robots_are_known_and_an_unbuildable_one_leaves_nothing_behind(tmp_path):
+def test_lerobots_own_robots_are_known_and_an_unbuildable_one_leaves_nothing_behind(tmp_path, capsys):
     arm = ["--task=so101_blocks", "--robot.type=so101_follower", "--robot.port=/dev/ttyNONE", "--robot.id=arm"]
-    plan = cli(*arm, "--dry_run=true")
-    assert plan.returncode == 0, plan.stderr
-    assert "plan: " in plan.stdout
+    assert main([*arm, "--dry_run=true"]) == 0
+    assert "plan: " in capsys.readouterr().out
     run = tmp_path / "run"
-    result = cli(*arm, f"--output_dir={run}")
-    assert result.returncode == 2
-    assert result.stderr.count("\n") == 1 and "--robot.type=so1" in result.stderr, result.stderr
+    assert main([*arm, f"--output_dir={run}"]) == 2
+    stderr = capsys.readouterr().err
+    assert stderr.count("\n") == 1 and "--robot.type=so1" in stderr, stderr
     assert not run.exists()
 
 
-def test_an_existing_run_directory_needs_resume_and_an_unwritable_one_is_named(tmp_path):
+def test_an_existing_run_directory_needs_resume_and_an_unwritable_one_is_named(tmp_path, capsys):
     run = tmp_path / "run"
     run.mkdir()
     (run / "config.json").write_text("{}")
-    result = cli("--n_instances=1", f"--output_dir={run}")
-    assert result.returncode == 2 and "already exists; pass --resume=true" in result.stderr
+    assert main(["--n_instances=1", f"--output_dir={run}"]) == 2
+    assert "already exists; pass --resume=true" in capsys.readouterr().err
     blocker = tmp_path / "file"
     blocker.write_text("")
-    result = cli("--n_instances=1", f"--output_dir={blocker / 'run'}")
-    assert result.returncode == 2 and "--output_dir: cannot write to" in result.stderr
-    assert result.stderr.count("\n") == 1
+    assert main(["--n_instances=1", f"--output_dir={blocker / 'run'}"]) == 2
+    stderr = capsys.readouterr().err
+    assert "--output_dir: cannot write to" in stderr and stderr.count("\n") == 1
 
 
 def test_the_run_stops_after_the_trial_that_exceeds_the_budget(tmp_path, capsys):

@@ -7,10 +7,13 @@ import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import import_module
-from typing import Any
+from typing import TYPE_CHECKING
 
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.policies.base import DEFAULT_POLICY, Builder, Policy, PolicyArgs, PolicyError
+
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
 
 PRETRAINED_BUILD = "lerobot_contrast.policies.pretrained:build"
 
@@ -68,7 +71,7 @@ def policy_entry(args: PolicyArgs) -> PolicyEntry:
     return POLICIES.get(args.type or DEFAULT_POLICY, LEROBOT)
 
 
-def make_policy(args: PolicyArgs, robot: Any, task: Task, rename_map: Mapping[str, str] | None = None) -> Policy:
+def make_policy(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str] | None = None) -> Policy:
     """The policy `args` names, built for `robot` and `task`; a one-line PolicyError where it cannot run there."""
     entry = policy_entry(args)
     if entry.path is not None:

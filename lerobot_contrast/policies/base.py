@@ -6,11 +6,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import TrialContext
+
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
 
 
 class Policy(Protocol):
@@ -62,7 +65,7 @@ class PolicyArgs:
 TABLETOP_ACTIONS = {"delta_x", "delta_y"}
 
 
-def check_tabletop(name: str, robot: Any) -> None:
+def check_tabletop(name: str, robot: Robot) -> None:
     if set(robot.action_features) != TABLETOP_ACTIONS:
         raise PolicyError(
             f"--policy.type={name} drives the simulated tabletop only; give --policy.path for {robot.name}"

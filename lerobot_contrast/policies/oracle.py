@@ -4,7 +4,7 @@ privileged access to the simulator's block poses."""
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Scene
@@ -15,8 +15,11 @@ from lerobot_contrast.domains.language_table.oracle import PushOracle
 from lerobot_contrast.domains.language_table.task import LanguageTableTask
 from lerobot_contrast.policies.base import PolicyArgs, PolicyError, check_tabletop
 
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
 
-def build(args: PolicyArgs, robot: Any, task: Task, rename_map: Mapping[str, str]) -> OraclePolicy:
+
+def build(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str]) -> OraclePolicy:
     check_tabletop("oracle", robot)
     if not (isinstance(task, LanguageTableTask) and reports_scene(robot)):
         raise PolicyError(

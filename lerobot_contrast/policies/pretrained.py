@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import torch
 from lerobot.common.control_utils import predict_action
@@ -22,17 +22,20 @@ from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.policies.base import PolicyArgs, PolicyError
 
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
+
 
 class PolicyLoadError(PolicyError):
     pass
 
 
-def build(args: PolicyArgs, robot: Any, task: Task, rename_map: Mapping[str, str]) -> PretrainedPolicy:
+def build(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str]) -> PretrainedPolicy:
     """--policy.path, or a LeRobot --policy.type built fresh with random weights."""
     return PretrainedPolicy(robot, args.path, args.type, args.device, rename_map, args.use_amp)
 
 
-def robot_dataset_features(robot: Any) -> dict[str, dict]:
+def robot_dataset_features(robot: Robot) -> dict[str, dict]:
     """The robot's features in LeRobot dataset form (`observation.state`, `observation.images.*`, `action`)."""
     return {
         **hw_to_dataset_features(robot.action_features, "action"),
@@ -55,7 +58,7 @@ def _load_config(path: str, device: str | None) -> PreTrainedConfig:
     return config
 
 
-def save_fresh_policy(robot: Any, policy_type: str, directory: Path, **overrides: Any) -> Path:
+def save_fresh_policy(robot: Robot, policy_type: str, directory: Path, **overrides: Any) -> Path:
     """A random-weight LeRobot policy shaped for `robot`, saved as `--policy.path` loads it (smoke tests, benchmarks)."""
     features = robot_dataset_features(robot)
     config = _fresh_config(policy_type, overrides.pop("device", None), features, **overrides)
@@ -99,7 +102,7 @@ class PretrainedPolicy:
 
     def __init__(
         self,
-        robot: Any,
+        robot: Robot,
         path: str | None = None,
         policy_type: str | None = None,
         device: str | None = None,

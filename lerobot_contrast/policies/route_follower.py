@@ -15,10 +15,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from lerobot_robot_locobot.actions import one_hot
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose
@@ -28,6 +27,9 @@ from lerobot_contrast.domains.vln import routes
 from lerobot_contrast.domains.vln.task import VLNTask
 from lerobot_contrast.policies.base import PolicyArgs, PolicyError
 
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
+
 # The route is planned this far inside the success radius, so stopping near its end counts as reached.
 PLAN_MARGIN_M = 0.3
 REACHED_MARGIN_M = 0.05
@@ -36,12 +38,19 @@ REACHED_MARGIN_M = 0.05
 CLEARANCE_M = 0.12
 WAYPOINT_REACHED_M = 0.15
 RANDOM_COMMANDS = ("forward", "turn_left", "turn_right")
+# VLN-CE's discrete actions, one float each as a LeRobot robot takes them (the largest positive one is executed).
+COMMANDS = ("forward", "turn_left", "turn_right", "stop")
 
 
-def build(args: PolicyArgs, robot: Any, task: Task, rename_map: Mapping[str, str]) -> RouteFollower:
+def build(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str]) -> RouteFollower:
     if not isinstance(task, VLNTask) or not hasattr(robot.config, "forward_m"):
         raise PolicyError("--policy.type=route_follower navigates --task=vln on --robot.type=locobot only")
     return RouteFollower(robot.config.forward_m, robot.config.turn_deg, args.language_blind)
+
+
+def one_hot(command: str) -> dict[str, float]:
+    """The discrete action that executes `command`."""
+    return {f"{c}.vel": float(c == command) for c in COMMANDS}
 
 
 def _wrap(angle: float) -> float:

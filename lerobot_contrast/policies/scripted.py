@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -11,8 +11,11 @@ from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.policies.base import PolicyArgs, check_tabletop
 
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
 
-def build(args: PolicyArgs, robot: Any, task: Task, rename_map: Mapping[str, str]) -> RandomPolicy:
+
+def build(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str]) -> RandomPolicy:
     from lerobot_contrast.domains.language_table.board import MAX_ACTION
 
     check_tabletop("random", robot)

@@ -20,6 +20,7 @@ from PIL import Image
 
 from lerobot_contrast.contrast.metrics import score
 from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
 from lerobot_contrast.record.observer import EpisodeFiles
 from lerobot_contrast.record.rerun_scene import MapBounds, instruction_markdown, log_map, outcome_markdown
@@ -89,7 +90,7 @@ class RerunEpisodeRecorder:
     `task` (optional) supplies perturbation descriptions (`task.perturbations`) and, through its
     `push_target(instance, scene)` hook where it has one, the goal position shown on the map."""
 
-    def __init__(self, run_dir: Path | str, task: Any = None, *, jpeg_quality: int = 75) -> None:
+    def __init__(self, run_dir: Path | str, task: Task | None = None, *, jpeg_quality: int = 75) -> None:
         self.run_dir = Path(run_dir)
         self.directory = self.run_dir / RERUN_DIR
         self.task = task
@@ -204,7 +205,7 @@ class RerunEpisodeRecorder:
             rrb.Blueprint(episode_views(cameras, None)).save(APPLICATION_ID, layout)
 
 
-def _descriptions(task: Any) -> dict[str, str]:
+def _descriptions(task: Task | None) -> dict[str, str]:
     return {} if task is None else {p.name: p.description for p in task.perturbations}
 
 

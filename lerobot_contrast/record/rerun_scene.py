@@ -17,6 +17,7 @@ from lerobot_contrast.contrast.metrics import spl
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import staging_moves
+from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
 
 AXIS_MEANING = {
@@ -56,7 +57,7 @@ def object_color(name: str, alpha: int = 255) -> tuple[int, int, int, int]:
     return (*PALETTE[zlib.crc32(name.encode()) % len(PALETTE)], alpha)
 
 
-def goal_position(task: Any, context: TrialContext) -> tuple[float, float] | None:
+def goal_position(task: Task, context: TrialContext) -> tuple[float, float] | None:
     """Where the instruction wants the robot or an object to end up, when the goal names a place."""
     instance = context.instance
     hook = getattr(task, "push_target", None)
@@ -88,7 +89,7 @@ class MapBounds:
 
     @classmethod
     def around(
-        cls, context: TrialContext, poses: list[tuple[float, float]], after: Scene, task: Any, margin: float = 0.1
+        cls, context: TrialContext, poses: list[tuple[float, float]], after: Scene, task: Task, margin: float = 0.1
     ) -> MapBounds:
         scenes = (context.instance.scene, context.base.scene, after)
         points = [(p.x, p.y) for scene in scenes for p in scene.objects.values()] + list(poses)
@@ -112,7 +113,7 @@ def log_map(
     context: TrialContext,
     poses: list[tuple[float, float]],
     after: Scene,
-    task: Any,
+    task: Task,
     bounds: MapBounds,
 ) -> None:
     """The static top-down map; the robot's per-frame position is logged with the other streams."""
@@ -134,7 +135,7 @@ def log_map(
         recording.log("map/robot", rr.Points2D.from_fields(radii=radius * 0.7, colors=[(255, 255, 255)]), static=True)
 
 
-def _log_goal(recording: rr.RecordingStream, context: TrialContext, task: Any, radius: float) -> None:
+def _log_goal(recording: rr.RecordingStream, context: TrialContext, task: Task, radius: float) -> None:
     """The goal region, and an arrow to it from the object the instruction moves."""
     goal = goal_position(task, context)
     if goal is None:

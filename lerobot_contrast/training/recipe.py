@@ -39,6 +39,8 @@ class Recipe:
     round_steps: int = 1500
     batch_size: int = 32
     num_workers: int = 1
+    # Torch threads of each training run: on a shared 2-core CPU one thread per process beats contending ones.
+    train_threads: int = 1
     # DAgger: learner roll-outs per round, and the oracle's share of executed actions in each round.
     betas: list[float] = field(default_factory=lambda: [0.5, 0.2, 0.0])
     dagger_episodes: int = 250
@@ -129,7 +131,7 @@ def _train(recipe: Recipe, round_index: int) -> None:
             "--wandb.enable=false",
         ]
     command = [str(Path(sys.executable).parent / "lerobot-train"), *args]
-    env = {**os.environ, "HF_HUB_OFFLINE": "1"}
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": str(recipe.train_threads)}
     with open(recipe.output_dir / f"train_{round_index}.log", "a") as log:
         subprocess.run(command, check=True, stdout=log, stderr=subprocess.STDOUT, env=env)
 

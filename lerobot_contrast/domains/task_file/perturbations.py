@@ -218,7 +218,7 @@ GENERIC: dict[str, tuple[str, Callable[..., PerturbFn], str]] = {
 }
 
 
-def custom_kwargs(fn: Callable, params: Mapping[str, Any], task: Any) -> dict[str, Any]:
+def custom_kwargs(fn: Callable, params: Mapping[str, Any], task: Composer) -> dict[str, Any]:
     """A custom perturbation's keyword arguments: its params, plus the task when it takes a `task` argument."""
     wants_task = "task" in inspect.signature(fn).parameters
     return {**params, "task": task} if wants_task else dict(params)
