@@ -101,7 +101,7 @@ def connect(robot: Robot) -> None:
         ) from None
 
 
-def evaluate(cfg: EvalConfig) -> int:
+def plan_and_run(cfg: EvalConfig) -> int:
     """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code."""
     source = adopt_plan(cfg) if cfg.plan else None
     validate(cfg)
@@ -180,7 +180,7 @@ def main(argv: list[str] | None = None) -> int:
         if wants_help(argv):
             print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv)))
             return 0
-        return evaluate(parse_config(EvalConfig, resume_args(argv)))
+        return plan_and_run(parse_config(EvalConfig, resume_args(argv)))
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

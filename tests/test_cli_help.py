@@ -3,6 +3,7 @@
 import re
 
 from lerobot_contrast.eval import main
+from lerobot_contrast.policies import DEFAULT_POLICY
 
 
 def help_of(capsys, *args: str) -> list[str]:
@@ -30,7 +31,7 @@ def test_help_lists_the_commands_own_flags_first_each_with_one_default(capsys):
     assert len(lines) < 150 and flags[-1] == "--robot.type"  # robot fields only once a type is chosen
     blocks = flag_blocks(lines)
     assert all(len(re.findall(r"default", text, flags=re.I)) <= 1 for text in blocks.values()), blocks
-    assert "(default: oracle)" in blocks["--policy.type"] and "so101_follower" in blocks["--robot.type"]
+    assert f"(default: {DEFAULT_POLICY})" in blocks["--policy.type"] and "so101_follower" in blocks["--robot.type"]
 
 
 def test_help_shows_the_fields_of_the_chosen_robot_type_only(capsys):

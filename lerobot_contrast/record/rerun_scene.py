@@ -13,7 +13,7 @@ import numpy as np
 import rerun as rr
 
 from lerobot_contrast.contrast.cost import moved_objects
-from lerobot_contrast.contrast.metrics import spl
+from lerobot_contrast.contrast.metrics import score
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import staging_moves
@@ -237,13 +237,13 @@ def instruction_markdown(context: TrialContext, descriptions: Mapping[str, str],
 
 def outcome_markdown(outcome: Outcome, cost: float, unit: str) -> str:
     verdict = ("success ✓" if outcome.success else "failure ✗") if outcome.status == "done" else outcome.status
-    reference = outcome.reference_length
+    reference, scores = outcome.reference_length, score(outcome)
     rows = [
         ("steps", str(outcome.steps)),
         ("path length", f"{outcome.path_length:.3f}"),
         ("reference length", "-" if reference is None else f"{reference:.3f}"),
-        ("SPL", "-" if reference is None else f"{spl(outcome.success, reference, outcome.path_length):.3f}"),
-        ("progress", "-" if outcome.progress is None else f"{outcome.progress:.2f}"),
+        ("SPL", "-" if scores["spl"] is None else f"{scores['spl']:.3f}"),
+        ("progress", f"{scores['progress']:.2f}"),
         ("cost", f"{cost:.3f} {unit}".strip()),
         ("duration", f"{outcome.duration_s:.1f} s"),
     ]

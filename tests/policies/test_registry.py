@@ -6,18 +6,28 @@ import pytest
 from lerobot_contrast import PolicyArgs, TrialContext, load_task, make_policy
 from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
 from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
-from lerobot_contrast.policies import LEROBOT, POLICIES, PRETRAINED_BUILD, PolicyEntry, PolicyError, policy_entry
+from lerobot_contrast.policies import (
+    DEFAULT_POLICY,
+    LEROBOT,
+    POLICIES,
+    PRETRAINED_BUILD,
+    PolicyEntry,
+    PolicyError,
+    policy_entry,
+)
 from lerobot_contrast.policies.pretrained import PretrainedPolicy
 from tests.lerobot_helpers import save_act
 
 
 def test_scripted_baselines_are_registered_with_the_task_they_solve():
-    assert {name: entry.task for name, entry in POLICIES.items()} == {
+    scripted = ("oracle", "random", "route_follower")
+    assert {name: POLICIES[name].task for name in scripted} == {
         "oracle": "language_table",
         "random": None,
         "route_follower": "vln",
     }
-    assert policy_entry(PolicyArgs()).name == "oracle"
+    assert policy_entry(PolicyArgs()) is POLICIES[DEFAULT_POLICY]
+    assert policy_entry(PolicyArgs(type="oracle")).name == "oracle"
     assert policy_entry(PolicyArgs(path="user/model")) is LEROBOT
     assert policy_entry(PolicyArgs(type="act")) is LEROBOT  # a LeRobot policy type, built fresh
 
