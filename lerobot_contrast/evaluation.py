@@ -3,6 +3,7 @@ and scores each planned trial in order, and owns the run's journal, results and 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -14,7 +15,7 @@ import numpy as np
 from lerobot_contrast.console import trial_line
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.contrast.metrics import score
+from lerobot_contrast.contrast.metrics import scored
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import Staged, materialize, trial_rng
 from lerobot_contrast.contrast.strategy import PlannedTrial, exceeds_budget
@@ -53,7 +54,7 @@ class Evaluation:
     seed: int = 0
     policy: Policy | None = None
     robot: Robot = None
-    observers: Sequence[EpisodeObserver] = ()  # they watch every episode (Rerun, dataset recording)
+    observers: Sequence[EpisodeObserver] = ()  # watch each episode the robot runs, then get its scored record
     operator: OperatorConsole | None = None  # None: the robot stages and reports its own scene (a simulator)
     fps: float | None = None  # control rate; None: as fast as the robot steps
     max_steps: int = 200
@@ -123,7 +124,8 @@ def run(evaluation: Evaluation) -> Results:
             print(f"resuming {run_dir.path} at trial {state.next_index} ({spent} spent)")
     complete = False
     try:
-        for record in trials(ev, state, _executor(ev)):
+        watching = ev.observers if ev.execute is None else ()  # observers watch the episodes a RobotRunner runs
+        for record in trials(ev, state, _executor(ev), watching):
             if run_dir is None:
                 records.append(record)
             else:
@@ -188,8 +190,11 @@ def check_budget(evaluation: Evaluation) -> None:
         )
 
 
-def trials(evaluation: Evaluation, state: LoopState, execute: Execute) -> Iterator[TrialRecord]:
-    """Execute the plan from `state.next_index`, yielding one record per trial, until done or over budget."""
+def trials(
+    evaluation: Evaluation, state: LoopState, execute: Execute, observers: Sequence[EpisodeObserver] = ()
+) -> Iterator[TrialRecord]:
+    """Execute the plan from `state.next_index`, yielding one scored record per trial, until done or over budget.
+    `observers` (those watching the episodes `execute` runs) receive each record and name their files in it."""
     ev = evaluation
     settings = ev.settings
     for trial in ev.plan[state.next_index :]:
@@ -199,7 +204,7 @@ def trials(evaluation: Evaluation, state: LoopState, execute: Execute) -> Iterat
         state.previous = staged
         state.next_index = trial.index + 1
         if staged.instance is None:
-            yield _record(trial, ev.task, staged, None, 0.0, state.cumulative_cost, None)
+            yield _not_applicable(trial, ev.task, state.cumulative_cost)
             continue
         context = TrialContext(
             index=trial.index,
@@ -212,6 +217,7 @@ def trials(evaluation: Evaluation, state: LoopState, execute: Execute) -> Iterat
             planned_trials=len(ev.plan),
             axis=_axis(ev.task, trial.perturbation),
             settings=settings,
+            repeat=trial.repeat,
         )
         started_at = datetime.now(UTC).isoformat(timespec="seconds")
         outcome = execute(context)
@@ -221,52 +227,38 @@ def trials(evaluation: Evaluation, state: LoopState, execute: Execute) -> Iterat
             state.scene = outcome.scene_after
         else:  # skipped: nothing was staged, so the next trial starts where this one would have
             cost = 0.0
-        yield _record(trial, ev.task, staged, outcome, cost, state.cumulative_cost, started_at)
+        record = scored(context, outcome, cost, state.cumulative_cost, started_at)
+        yield _observed(record, observers) if outcome.status in STAGED else record
+
+
+def _observed(record: TrialRecord, observers: Sequence[EpisodeObserver]) -> TrialRecord:
+    """The record with the files the observers wrote for its episode."""
+    for observer in observers:
+        files = observer.end(record)
+        if files.rerun_path is not None:
+            record = dataclasses.replace(record, rerun_path=files.rerun_path)
+        if files.dataset_episode is not None:
+            record = dataclasses.replace(record, dataset_episode=files.dataset_episode)
+    return record
 
 
 def _axis(task: Task, perturbation: str | None) -> str | None:
     return None if perturbation is None else task.perturbations.get(perturbation).axis
 
 
-def _record(
-    trial: PlannedTrial,
-    task: Task,
-    staged: Staged,
-    outcome: Outcome | None,
-    cost: float,
-    cumulative: float,
-    started_at: str | None,
-) -> TrialRecord:
-    """The journal's record of a trial; a perturbation that did not apply has no outcome."""
-    common = {
-        "index": trial.index,
-        "base_id": trial.base.id,
-        "perturbation": trial.perturbation,
-        "axis": _axis(task, trial.perturbation),
-        "repeat": trial.repeat,
-        "cost": cost,
-        "cumulative_cost": cumulative,
-    }
-    if outcome is None or staged.instance is None:
-        return TrialRecord(
-            **common, family=trial.base.family, staging="not_applicable", status="not_applicable", instance=None
-        )
+def _not_applicable(trial: PlannedTrial, task: Task, cumulative: float) -> TrialRecord:
     return TrialRecord(
-        **common,
-        family=staged.instance.family,
-        staging=staged.staging,
-        status=outcome.status,
-        instance=staged.instance,
-        **score(outcome),
-        path_length=outcome.path_length,
-        reference_length=outcome.reference_length,
-        steps=outcome.steps,
-        duration_s=outcome.duration_s,
-        started_at=started_at,
-        scene_after=outcome.scene_after,
-        rerun_path=outcome.rerun_path,
-        dataset_episode=outcome.dataset_episode,
-        extra=dict(outcome.extra),
+        index=trial.index,
+        base_id=trial.base.id,
+        perturbation=trial.perturbation,
+        axis=_axis(task, trial.perturbation),
+        family=trial.base.family,
+        staging="not_applicable",
+        repeat=trial.repeat,
+        status="not_applicable",
+        instance=None,
+        cost=0.0,
+        cumulative_cost=cumulative,
     )
 
 

@@ -7,7 +7,6 @@ judges outcomes from the scene itself, as in simulation.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Sequence
@@ -230,7 +229,7 @@ class RobotRunner:
             cost=self._cost(staging),
             extra=self._extra(context, staging, episode),
         )
-        return self._recorded(context, outcome)
+        return outcome
 
     def _aborted(self, context: TrialContext, staging: Staging, episode: Episode) -> Outcome:
         # After a lost link the scene is unknown (a restarted simulator is empty): assume it is as staged.
@@ -250,7 +249,7 @@ class RobotRunner:
         asked = self.operator is not None and self._halt is None and episode.ended_by == "estop"
         if asked and self.operator.aborted("emergency stop").action == "stop":
             self._halt = SessionStopped("the operator stopped the session after an emergency stop")
-        return self._recorded(context, outcome)
+        return outcome
 
     def _extra(self, context: TrialContext, staging: Staging, episode: Episode) -> dict[str, Any]:
         extra: dict[str, Any] = {
@@ -262,15 +261,6 @@ class RobotRunner:
             if staging.moved is not None:
                 extra["moved_reported"] = staging.moved
         return extra
-
-    def _recorded(self, context: TrialContext, outcome: Outcome) -> Outcome:
-        cost = context.planned_cost if outcome.cost is None else outcome.cost
-        rerun_path, dataset_episode = None, None
-        for observer in self.observers:
-            files = observer.end(outcome, cost)
-            rerun_path = files.rerun_path or rerun_path
-            dataset_episode = files.dataset_episode if files.dataset_episode is not None else dataset_episode
-        return dataclasses.replace(outcome, rerun_path=rerun_path, dataset_episode=dataset_episode)
 
 
 def _skipped(context: TrialContext) -> Outcome:

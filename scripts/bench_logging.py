@@ -28,6 +28,7 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from lerobot_contrast.contrast.metrics import scored  # noqa: E402
 from lerobot_contrast.contrast.trial import Outcome, TrialContext  # noqa: E402
 from lerobot_contrast.domains.language_table import LanguageTableTask  # noqa: E402
 from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig  # noqa: E402
@@ -93,7 +94,7 @@ def run_episode(
         time.sleep(max(0.0, tick - time.perf_counter()))
     outcome = Outcome(success=False, steps=steps, path_length=0.0, scene_after=robot.read_scene(), duration_s=0.0)
     start = time.perf_counter()
-    observer.end(outcome, 0.0)
+    observer.end(scored(trial, outcome, 0.0, 0.0))
     timings.start_end_s.append(between + time.perf_counter() - start)
 
 

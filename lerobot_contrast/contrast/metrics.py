@@ -1,8 +1,9 @@
-"""Episode metrics: success, success weighted by path length (SPL), and subgoal progress."""
+"""Episode metrics: success, success weighted by path length (SPL), and subgoal progress; `score` and `scored` are
+the one place an outcome becomes metrics and a scored record."""
 
 from __future__ import annotations
 
-from lerobot_contrast.contrast.trial import Outcome
+from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
 
 
 def spl(success: bool, reference_length: float, path_length: float) -> float:
@@ -33,3 +34,31 @@ def score(outcome: Outcome) -> dict[str, bool | float | None]:
         "spl": None if reference is None else spl(outcome.success, reference, outcome.path_length),
         "progress": outcome.progress if outcome.progress is not None else float(outcome.success),
     }
+
+
+def scored(
+    context: TrialContext, outcome: Outcome, cost: float, cumulative_cost: float, started_at: str | None = None
+) -> TrialRecord:
+    """The journal's record of a trial that ran: what was staged, what it cost, and its scores."""
+    instance = context.instance
+    return TrialRecord(
+        index=context.index,
+        base_id=context.base.id,
+        perturbation=instance.perturbation,
+        axis=context.axis,
+        family=instance.family,
+        staging=context.staging,
+        repeat=context.repeat,
+        status=outcome.status,
+        instance=instance,
+        cost=cost,
+        cumulative_cost=cumulative_cost,
+        **score(outcome),
+        path_length=outcome.path_length,
+        reference_length=outcome.reference_length,
+        steps=outcome.steps,
+        duration_s=outcome.duration_s,
+        started_at=started_at,
+        scene_after=outcome.scene_after,
+        extra=dict(outcome.extra),
+    )

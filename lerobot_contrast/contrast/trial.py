@@ -28,6 +28,7 @@ class TrialContext:
     planned_trials: int
     axis: str | None = None  # L | LB | S | SB, None for an original
     settings: dict[str, Any] = field(default_factory=dict)  # strategy, policy, task: for recording properties
+    repeat: int = 0  # which run of the planned trial this is
 
 
 @dataclass(frozen=True)
@@ -47,8 +48,6 @@ class Outcome:
     reference_length: float | None = None
     status: Status = "done"
     cost: float | None = None
-    rerun_path: str | None = None
-    dataset_episode: int | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 
 

@@ -19,8 +19,7 @@ from lerobot.datasets import LeRobotDataset
 from lerobot.utils.feature_utils import build_dataset_frame, hw_to_dataset_features
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.contrast.metrics import score
-from lerobot_contrast.contrast.trial import Outcome, TrialContext
+from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
 from lerobot_contrast.record.observer import EpisodeFiles
 
 DATASET_DIR = "dataset"
@@ -117,10 +116,10 @@ class DatasetRecorder:
             self._hold(self._pending, success=False, done=False)
         self._pending = frame
 
-    def end(self, outcome: Outcome, cost: float) -> EpisodeFiles:
+    def end(self, record: TrialRecord) -> EpisodeFiles:
         context = self._require_context("end")
         if self._pending is not None:
-            self._hold(self._pending, success=bool(outcome.success), done=True)
+            self._hold(self._pending, success=bool(record.success), done=True)
         self._pending = None
         self._drain()
         self._wait()
@@ -132,7 +131,7 @@ class DatasetRecorder:
         # LeRobot writes parquet footers only when finalizing; the next episode resumes into new files.
         self.dataset.finalize()
         self.dataset = None
-        self._append_sidecar(_episode_row(episode, context, outcome, cost))
+        self._append_sidecar(_episode_row(episode, context, record))
         return EpisodeFiles(dataset_episode=episode)
 
     def discard(self) -> None:
@@ -235,9 +234,9 @@ def _check_features(root: Path, stored: dict[str, dict], wanted: dict[str, dict]
         )
 
 
-def _episode_row(episode: int, context: TrialContext, outcome: Outcome, cost: float) -> dict[str, Any]:
+def _episode_row(episode: int, context: TrialContext, record: TrialRecord) -> dict[str, Any]:
     """One sidecar line: which trial the episode is, what it cost and how it scored."""
-    instance, scores = context.instance, score(outcome)
+    instance = context.instance
     return {
         "version": SIDECAR_VERSION,
         "episode_index": episode,
@@ -248,15 +247,15 @@ def _episode_row(episode: int, context: TrialContext, outcome: Outcome, cost: fl
         "axis": context.axis,
         "staging": context.staging,
         "planned_cost": context.planned_cost,
-        "cost": cost,
+        "cost": record.cost,
         "cost_unit": context.settings.get("cost_unit"),
-        "status": outcome.status,
-        "success": bool(scores["success"]),
-        "spl": scores["spl"],
-        "progress": scores["progress"],
-        "path_length": outcome.path_length,
-        "reference_length": outcome.reference_length,
-        "steps": outcome.steps,
+        "status": record.status,
+        "success": bool(record.success),
+        "spl": record.spl,
+        "progress": record.progress,
+        "path_length": record.path_length,
+        "reference_length": record.reference_length,
+        "steps": record.steps,
         "settings": dict(context.settings),
         "instance": instance.to_json(),
     }

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from lerobot_contrast.contrast.trial import Outcome, TrialContext
+from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
 
 
 @dataclass(frozen=True)
@@ -28,7 +28,9 @@ class EpisodeObserver(Protocol):
 
     def step(self, timestamp_s: float, observation: dict[str, Any], action: dict[str, Any]) -> None: ...
 
-    def end(self, outcome: Outcome, cost: float) -> EpisodeFiles: ...
+    def end(self, record: TrialRecord) -> EpisodeFiles:
+        """The episode is over: `record` is its scored journal record (cost, metrics, the scene left behind)."""
+        ...
 
     def discard(self) -> None:
         """Drop the episode in progress (the operator chose to redo or skip the trial)."""
@@ -48,7 +50,7 @@ class QuietObserver:
     def step(self, timestamp_s: float, observation: dict[str, Any], action: dict[str, Any]) -> None:
         pass
 
-    def end(self, outcome: Outcome, cost: float) -> EpisodeFiles:
+    def end(self, record: TrialRecord) -> EpisodeFiles:
         return EpisodeFiles()
 
     def discard(self) -> None:

@@ -18,10 +18,9 @@ import rerun as rr
 import rerun.blueprint as rrb
 from PIL import Image
 
-from lerobot_contrast.contrast.metrics import score
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.task import Task
-from lerobot_contrast.contrast.trial import Outcome, TrialContext
+from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
 from lerobot_contrast.record.observer import EpisodeFiles
 from lerobot_contrast.record.rerun_scene import MapBounds, instruction_markdown, log_map, outcome_markdown
 
@@ -118,17 +117,17 @@ class RerunEpisodeRecorder:
             frame = np.array(observation[cam], dtype=np.uint8, copy=True)
             episode.jpegs[cam].append(self._encoder.submit(_jpeg, frame, self.jpeg_quality))
 
-    def end(self, outcome: Outcome, cost: float) -> EpisodeFiles:
+    def end(self, record: TrialRecord) -> EpisodeFiles:
         episode = self._require_episode("end")
         self._episode = None
         context = episode.context
         path = episode_path(self.run_dir, context.index)
         partial = path.with_name(path.name + ".partial")
         self.directory.mkdir(parents=True, exist_ok=True)
-        bounds = MapBounds.around(context, episode.poses, outcome.scene_after, self.task)
+        bounds = MapBounds.around(context, episode.poses, record.scene_after, self.task)
         recording = rr.RecordingStream(APPLICATION_ID, recording_id=f"{self.run_name}-trial{context.index:06d}")
         recording.save(partial, default_blueprint=rrb.Blueprint(episode_views(episode.cameras, bounds)))
-        self._log_episode(recording, episode, outcome, cost, bounds)
+        self._log_episode(recording, episode, record, bounds)
         recording.flush(timeout_sec=FLUSH_TIMEOUT_S)
         recording.disconnect()  # writes the footer; only then is the file complete
         os.replace(partial, path)
@@ -152,13 +151,13 @@ class RerunEpisodeRecorder:
         return self._episode
 
     def _log_episode(
-        self, recording: rr.RecordingStream, episode: _Episode, outcome: Outcome, cost: float, bounds: MapBounds
+        self, recording: rr.RecordingStream, episode: _Episode, record: TrialRecord, bounds: MapBounds
     ) -> None:
         context = episode.context
         recording.send_recording_name(
             f"trial {context.index} · {perturbation_label(context.instance.perturbation)} · {context.instance.id}"
         )
-        _send_properties(recording, context, outcome, cost)
+        _send_properties(recording, context, record)
         descriptions = _descriptions(self.task)
         unit = str(context.settings.get("cost_unit", ""))
         recording.log(
@@ -167,9 +166,9 @@ class RerunEpisodeRecorder:
             static=True,
         )
         recording.log(
-            "outcome", rr.TextDocument(outcome_markdown(outcome, cost, unit), media_type="text/markdown"), static=True
+            "outcome", rr.TextDocument(outcome_markdown(record, unit), media_type="text/markdown"), static=True
         )
-        log_map(recording, context, episode.poses, outcome.scene_after, self.task, bounds)
+        log_map(recording, context, episode.poses, record.scene_after, self.task, bounds)
         self._log_series(recording, episode)
 
     def _log_series(self, recording: rr.RecordingStream, episode: _Episode) -> None:
@@ -209,7 +208,7 @@ def _descriptions(task: Task | None) -> dict[str, str]:
     return {} if task is None else {p.name: p.description for p in task.perturbations}
 
 
-def _send_properties(recording: rr.RecordingStream, context: TrialContext, outcome: Outcome, cost: float) -> None:
+def _send_properties(recording: rr.RecordingStream, context: TrialContext, record: TrialRecord) -> None:
     """Recording properties, so episodes can be found by instance, perturbation, policy and metric."""
     instance = context.instance
     settings = context.settings
@@ -229,10 +228,9 @@ def _send_properties(recording: rr.RecordingStream, context: TrialContext, outco
             task=str(settings.get("task", "")),
         ),
     )
-    scores = score(outcome)
-    metrics = {"success": bool(scores["success"]), "status": outcome.status, "steps": int(outcome.steps)}
-    metrics["cost"] = float(cost)
-    metrics["progress"] = float(scores["progress"])
-    if scores["spl"] is not None:
-        metrics["spl"] = scores["spl"]
+    metrics = {"success": bool(record.success), "status": record.status, "steps": int(record.steps or 0)}
+    metrics["cost"] = float(record.cost)
+    metrics["progress"] = float(record.progress or 0.0)
+    if record.spl is not None:
+        metrics["spl"] = record.spl
     recording.send_property("metric", rr.AnyValues(**metrics))

@@ -13,12 +13,11 @@ import numpy as np
 import rerun as rr
 
 from lerobot_contrast.contrast.cost import moved_objects
-from lerobot_contrast.contrast.metrics import score
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.task import Task
-from lerobot_contrast.contrast.trial import Outcome, TrialContext
+from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
 
 AXIS_MEANING = {
     "L": "new wording, same behaviour",
@@ -235,16 +234,16 @@ def instruction_markdown(context: TrialContext, descriptions: Mapping[str, str],
     return "\n".join(lines)
 
 
-def outcome_markdown(outcome: Outcome, cost: float, unit: str) -> str:
-    verdict = ("success ✓" if outcome.success else "failure ✗") if outcome.status == "done" else outcome.status
-    reference, scores = outcome.reference_length, score(outcome)
+def outcome_markdown(record: TrialRecord, unit: str) -> str:
+    verdict = ("success ✓" if record.success else "failure ✗") if record.status == "done" else record.status
+    reference = record.reference_length
     rows = [
-        ("steps", str(outcome.steps)),
-        ("path length", f"{outcome.path_length:.3f}"),
+        ("steps", str(record.steps)),
+        ("path length", f"{record.path_length:.3f}"),
         ("reference length", "-" if reference is None else f"{reference:.3f}"),
-        ("SPL", "-" if scores["spl"] is None else f"{scores['spl']:.3f}"),
-        ("progress", f"{scores['progress']:.2f}"),
-        ("cost", f"{cost:.3f} {unit}".strip()),
-        ("duration", f"{outcome.duration_s:.1f} s"),
+        ("SPL", "-" if record.spl is None else f"{record.spl:.3f}"),
+        ("progress", "-" if record.progress is None else f"{record.progress:.2f}"),
+        ("cost", f"{record.cost:.3f} {unit}".strip()),
+        ("duration", f"{record.duration_s:.1f} s"),
     ]
     return "\n".join([f"### Outcome: {verdict}", "", "| | |", "|---|---|", *(f"| {k} | {v} |" for k, v in rows)])

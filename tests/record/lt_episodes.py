@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from lerobot_contrast.contrast.metrics import scored
 from lerobot_contrast.contrast.task import perturb
 from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
 from lerobot_contrast.domains.language_table import LanguageTableTask
@@ -92,7 +93,7 @@ class Episodes:
             duration_s=time.perf_counter() - start,
             reference_length=0.3,
         )
-        return outcome, observer.end(outcome, context.planned_cost)
+        return outcome, observer.end(scored(context, outcome, context.planned_cost, 0.0))
 
 
 def record_run(run_dir: Path, contexts: list[TrialContext], observers: list[Any], steps: int = 8) -> list[TrialRecord]:
@@ -149,8 +150,8 @@ class Fanout:
         for observer in self.observers:
             observer.step(*args)
 
-    def end(self, outcome: Outcome, cost: float) -> EpisodeFiles:
-        files = [observer.end(outcome, cost) for observer in self.observers]
+    def end(self, record: TrialRecord) -> EpisodeFiles:
+        files = [observer.end(record) for observer in self.observers]
         return EpisodeFiles(
             rerun_path=next((f.rerun_path for f in files if f.rerun_path), None),
             dataset_episode=next((f.dataset_episode for f in files if f.dataset_episode is not None), None),

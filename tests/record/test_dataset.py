@@ -9,6 +9,7 @@ import sys
 import pytest
 from lerobot.datasets import LeRobotDataset
 
+from lerobot_contrast.contrast.metrics import scored
 from lerobot_contrast.contrast.trial import Outcome
 from lerobot_contrast.record.dataset import DatasetError, DatasetRecorder
 from tests.record.conftest import STEPS, read_rrd
@@ -79,7 +80,7 @@ def episode(recorder, episodes, context, steps=4, discard_after=None):
     outcome = Outcome(
         success=True, steps=steps, path_length=0.04, scene_after=episodes.robot.read_scene(), duration_s=0.4
     )
-    return recorder.end(outcome, 0.0)
+    return recorder.end(scored(context, outcome, 0.0, 0.0))
 
 
 @pytest.mark.slow
@@ -137,7 +138,7 @@ def test_an_episode_without_steps_stores_nothing(tmp_path):
     (context,) = contexts(perturbations=())
     recorder = DatasetRecorder(tmp_path, fps=10)
     recorder.start(context, FEATURES, POSE_KEYS)
-    files = recorder.end(Outcome(True, 0, 0.0, context.instance.scene, 0.0), 0.0)
+    files = recorder.end(scored(context, Outcome(True, 0, 0.0, context.instance.scene, 0.0), 0.0, 0.0))
     recorder.close()
     assert files.dataset_episode is None
     assert json.loads((tmp_path / "dataset" / "meta" / "info.json").read_text())["total_episodes"] == 0

@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 
+from lerobot_contrast.contrast.metrics import scored
 from lerobot_contrast.contrast.trial import Outcome
 from lerobot_contrast.record.rerun_log import APPLICATION_ID, LAYOUT_FILE, RerunEpisodeRecorder
 from tests.record.conftest import STEPS, read_rrd, rerun_cli, static_row
@@ -88,7 +89,7 @@ def test_an_episode_that_ends_before_its_first_step_still_shows_scene_and_outcom
     recorder = RerunEpisodeRecorder(tmp_path)
     recorder.start(context, FEATURES, POSE_KEYS)
     outcome = Outcome(success=True, steps=0, path_length=0.0, scene_after=context.instance.scene, duration_s=0.0)
-    files = recorder.end(outcome, 0.0)
+    files = recorder.end(scored(context, outcome, 0.0, 0.0))
     recorder.close()
     _, chunks = read_rrd(tmp_path / files.rerun_path)
     assert "success ✓" in static_row(chunks["/outcome"])["text"] and "/camera/top" not in chunks
