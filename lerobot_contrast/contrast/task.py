@@ -79,6 +79,21 @@ class Task:
         """Task-specific metrics of the robot's path (e.g. nDTW for navigation), recorded with the trial."""
         return {}
 
+    def goal_position(self, instance: Instance) -> tuple[float, float] | None:
+        """Where the instruction wants the robot or an object to end up, for drawing the goal on a map.
+
+        Default: a goal's `target_xy`, else the pose of the object its `target_block`, `target` or
+        `goal_object` names; None when the goal names no place."""
+        goal = instance.goal
+        if "target_xy" in goal:
+            x, y = goal["target_xy"][:2]
+            return float(x), float(y)
+        for key in ("target_block", "target", "goal_object"):
+            pose = instance.scene.objects.get(goal.get(key)) if isinstance(goal.get(key), str) else None
+            if pose is not None:
+                return pose.x, pose.y
+        return None
+
     def cost_model(self, name: str) -> CostModel:
         """The `--cost` model by name (default: the core's distance or reset-time model)."""
         return make_cost_model(name)

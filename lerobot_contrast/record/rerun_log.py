@@ -86,8 +86,8 @@ class _Episode:
 class RerunEpisodeRecorder:
     """An `EpisodeObserver` writing one `.rrd` per episode into `run_dir/rerun/`.
 
-    `task` (optional) supplies perturbation descriptions (`task.perturbations`) and, through its
-    `push_target(instance, scene)` hook where it has one, the goal position shown on the map."""
+    `task` (optional) supplies perturbation descriptions (`task.perturbations`) and the goal position shown on
+    the map (`task.goal_position`)."""
 
     def __init__(self, run_dir: Path | str, task: Task | None = None, *, jpeg_quality: int = 75) -> None:
         self.run_dir = Path(run_dir)

@@ -56,27 +56,6 @@ def object_color(name: str, alpha: int = 255) -> tuple[int, int, int, int]:
     return (*PALETTE[zlib.crc32(name.encode()) % len(PALETTE)], alpha)
 
 
-def goal_position(task: Task, context: TrialContext) -> tuple[float, float] | None:
-    """Where the instruction wants the robot or an object to end up, when the goal names a place."""
-    instance = context.instance
-    hook = getattr(task, "push_target", None)
-    if hook is not None:
-        try:
-            _, xy = hook(instance, instance.scene)
-            return float(xy[0]), float(xy[1])
-        except (KeyError, ValueError):
-            return None
-    goal = instance.goal
-    if "target_xy" in goal:
-        x, y = goal["target_xy"][:2]
-        return float(x), float(y)
-    for key in ("target_block", "target", "goal_object"):
-        pose = instance.scene.objects.get(goal.get(key)) if isinstance(goal.get(key), str) else None
-        if pose is not None:
-            return pose.x, pose.y
-    return None
-
-
 @dataclass(frozen=True)
 class MapBounds:
     x_range: tuple[float, float]
@@ -88,11 +67,16 @@ class MapBounds:
 
     @classmethod
     def around(
-        cls, context: TrialContext, poses: list[tuple[float, float]], after: Scene, task: Task, margin: float = 0.1
+        cls,
+        context: TrialContext,
+        poses: list[tuple[float, float]],
+        after: Scene,
+        task: Task | None,
+        margin: float = 0.1,
     ) -> MapBounds:
         scenes = (context.instance.scene, context.base.scene, after)
         points = [(p.x, p.y) for scene in scenes for p in scene.objects.values()] + list(poses)
-        goal = goal_position(task, context)
+        goal = (task or Task()).goal_position(context.instance)
         points += [goal] if goal is not None else []
         if not points:
             return cls((-1.0, 1.0), (-1.0, 1.0))
@@ -112,7 +96,7 @@ def log_map(
     context: TrialContext,
     poses: list[tuple[float, float]],
     after: Scene,
-    task: Task,
+    task: Task | None,
     bounds: MapBounds,
 ) -> None:
     """The static top-down map; the robot's per-frame position is logged with the other streams."""
@@ -134,9 +118,9 @@ def log_map(
         recording.log("map/robot", rr.Points2D.from_fields(radii=radius * 0.7, colors=[(255, 255, 255)]), static=True)
 
 
-def _log_goal(recording: rr.RecordingStream, context: TrialContext, task: Task, radius: float) -> None:
+def _log_goal(recording: rr.RecordingStream, context: TrialContext, task: Task | None, radius: float) -> None:
     """The goal region, and an arrow to it from the object the instruction moves."""
-    goal = goal_position(task, context)
+    goal = (task or Task()).goal_position(context.instance)
     if goal is None:
         return
     gold = (255, 215, 0)

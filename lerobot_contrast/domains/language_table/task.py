@@ -101,5 +101,13 @@ class LanguageTableTask(Task):
     def push_target(self, instance: Instance, scene: Scene) -> tuple[str, np.ndarray]:
         return fam.push_target(instance, scene)
 
+    def goal_position(self, instance: Instance) -> tuple[float, float] | None:
+        """Where the pushed block should end up."""
+        try:
+            _, xy = self.push_target(instance, instance.scene)
+        except (KeyError, ValueError):
+            return None
+        return float(xy[0]), float(xy[1])
+
     def enumerate_conditions(self) -> list[tuple[str, ...]]:
         return enumerate_conditions(self.block_mode)
