@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -72,7 +73,7 @@ class Episodes:
         self.robot.stage_scene(context.instance.scene)
         return self.robot.get_observation()
 
-    def run(self, observer: Any, context: TrialContext, steps: int = 12) -> tuple[Outcome, EpisodeFiles]:
+    def run(self, observer: Any, context: TrialContext, steps: int = 12) -> tuple[TrialRecord, EpisodeFiles]:
         observation = self.stage(context)
         policy = OraclePolicy(self.robot.read_scene, self.task)
         policy.reset(context)
@@ -93,7 +94,8 @@ class Episodes:
             duration_s=time.perf_counter() - start,
             reference_length=0.3,
         )
-        return outcome, observer.end(scored(context, outcome, context.planned_cost, 0.0))
+        record = scored(context, outcome, context.planned_cost, 0.0)
+        return record, observer.end(record)
 
 
 def record_run(run_dir: Path, contexts: list[TrialContext], observers: list[Any], steps: int = 8) -> list[TrialRecord]:
@@ -106,28 +108,8 @@ def record_run(run_dir: Path, contexts: list[TrialContext], observers: list[Any]
     journal = Journal.open(run_dir / "journal.jsonl")
     episodes = Episodes()
     for context in contexts:
-        outcome, files = episodes.run(Fanout(observers), context, steps)
-        journal.append(
-            TrialRecord(
-                index=context.index,
-                base_id=context.base.id,
-                perturbation=context.instance.perturbation,
-                axis=context.axis,
-                family=context.instance.family,
-                staging=context.staging,
-                repeat=0,
-                status="done",
-                instance=context.instance,
-                cost=context.planned_cost,
-                cumulative_cost=0.0,
-                success=outcome.success,
-                steps=outcome.steps,
-                path_length=outcome.path_length,
-                scene_after=outcome.scene_after,
-                rerun_path=files.rerun_path,
-                dataset_episode=files.dataset_episode,
-            )
-        )
+        record, files = episodes.run(Fanout(observers), context, steps)
+        journal.append(replace(record, rerun_path=files.rerun_path, dataset_episode=files.dataset_episode))
     for observer in observers:
         observer.close()
     write_results(run_dir / "results.parquet", journal.records, {"strategy": "contrast"})
