@@ -5,6 +5,7 @@
 Started again with the same settings it resumes where it stopped. The last line is the figures, as name=value pairs.
 """
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,4 +31,10 @@ def main(config: TrainDefaultPolicy) -> None:
 
 
 if __name__ == "__main__":
-    main(draccus.parse(TrainDefaultPolicy))
+    try:
+        parsed = draccus.parse(TrainDefaultPolicy)
+    except draccus.utils.ParsingError as error:
+        cause = error.__cause__ if isinstance(error.__cause__, ValueError) else error
+        print(f"error: {cause}", file=sys.stderr)
+        sys.exit(2)
+    main(parsed)

@@ -34,15 +34,14 @@ class Recipe:
     # Oracle demonstrations, executed with this much action noise (labels stay noise-free).
     demos: int = 1500
     demo_noise: float = 0.01
-    # Gradient steps of the first training run, then of each DAgger round.
-    steps: int = 5000
-    round_steps: int = 1500
+    # Gradient steps of each training run: the first from scratch, then one after each DAgger round.
+    steps: list[int] = field(default_factory=lambda: [5000, 1500, 1500, 1500, 2000, 2000])
     batch_size: int = 32
     num_workers: int = 1
     # Torch threads of each training run: on a shared 2-core CPU one thread per process beats contending ones.
     train_threads: int = 1
     # DAgger: learner roll-outs per round, and the oracle's share of executed actions in each round.
-    betas: list[float] = field(default_factory=lambda: [0.5, 0.2, 0.0])
+    betas: list[float] = field(default_factory=lambda: [0.5, 0.2, 0.0, 0.0, 0.0])
     dagger_episodes: int = 250
     max_steps: int = 120
     # Closed-loop check after training: fresh instances from a seed never used for data.
@@ -50,6 +49,13 @@ class Recipe:
     eval_seed: int = 1_000_003
     eval_max_steps: int = board.MAX_EPISODE_STEPS
     device: str = "cpu"
+
+    def __post_init__(self) -> None:
+        if len(self.steps) != len(self.betas) + 1:
+            raise ValueError(
+                f"--recipe.steps has {len(self.steps)} entries for {len(self.betas)} DAgger rounds; "
+                "give one more than --recipe.betas (the first training run, then one per round)"
+            )
 
     @property
     def dataset(self) -> Path:
@@ -105,7 +111,7 @@ def _record(recipe: Recipe, actor, instances, label: str) -> None:
 def _train(recipe: Recipe, round_index: int) -> None:
     out = recipe.train_dir(round_index)
     last = out / "checkpoints" / "last" / "pretrained_model"
-    steps = recipe.steps if round_index == 0 else recipe.round_steps
+    steps = recipe.steps[round_index]
     if (out / "checkpoints").exists():
         args = ["--resume=true", f"--config_path={last / 'train_config.json'}"]
     else:

@@ -2,6 +2,9 @@
 round, the closed-loop check, shipping, and resuming without redoing finished work."""
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,8 +33,7 @@ def test_smoke_recipe_trains_with_lerobot_and_resumes_without_redoing_work(tmp_p
     recipe = Recipe(
         output_dir=tmp_path / "run",
         demos=6,
-        steps=6,
-        round_steps=4,
+        steps=[6, 4],
         betas=[0.5],
         dagger_episodes=2,
         num_workers=0,
@@ -55,3 +57,18 @@ def test_smoke_recipe_trains_with_lerobot_and_resumes_without_redoing_work(tmp_p
     ship(recipe, tmp_path / "weights")
     shipped = sorted(p.name for p in (tmp_path / "weights").iterdir())
     assert "model.safetensors" in shipped and "config.json" in shipped and "train_config.json" not in shipped
+
+
+def test_a_steps_list_that_does_not_match_the_rounds_is_refused_in_one_line():
+    script = Path(__file__).parents[2] / "scripts" / "train_default_policy.py"
+    result = subprocess.run(
+        [sys.executable, str(script), "--recipe.steps=[10,20]", "--recipe.betas=[0.5,0.0]"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "error: --recipe.steps has 2 entries for 2 DAgger rounds; give one more than --recipe.betas "
+        "(the first training run, then one per round)"
+    ]

@@ -67,14 +67,27 @@ class TabletopPointerPolicy(PreTrainedPolicy):
     def reset(self) -> None:
         """A new episode: the goal is read again from its first frame."""
         self._goal: Tensor | None = None
+        self._read: tuple[tuple[str, ...], dict[str, Tensor]] | None = None  # the episode's instruction, encoded
 
     def perceive(self, batch: dict[str, Any]) -> dict[str, Tensor]:
         """Object positions (B, K, 2) in metres, heatmap logits, presence logits and the instruction's heads."""
         image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
         logits, presence = self.heatmaps(image)
         positions = apply_homography(self.image_to_board, soft_argmax(logits))
-        text = self.instruction(self.tokenizer(list(batch["task"]), image.device))
-        return {"logits": logits, "presence": presence, "positions": positions, **text}
+        return {
+            "logits": logits,
+            "presence": presence,
+            "positions": positions,
+            **self.read(batch["task"], image.device),
+        }
+
+    def read(self, tasks: list[str], device: torch.device) -> dict[str, Tensor]:
+        """The instruction heads; at evaluation an episode's instruction is encoded once."""
+        if self.training:
+            return self.instruction(self.tokenizer(list(tasks), device))
+        if self._read is None or self._read[0] != tuple(tasks):
+            self._read = (tuple(tasks), self.instruction(self.tokenizer(list(tasks), device)))
+        return self._read[1]
 
     def compose(self, seen: dict[str, Tensor]) -> tuple[Tensor, Tensor]:
         """The pushed object's position and the goal (B, 2), from what `perceive` found."""
