@@ -18,7 +18,7 @@ from lerobot.utils.robot_utils import precise_sleep
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.contrast.staging import reports_scene
+from lerobot_contrast.contrast.staging import read_scene, reports_scene
 from lerobot_contrast.contrast.task import Judgement, Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
 from lerobot_contrast.operator_console import Label, OperatorConsole, SessionStopped, Staging
@@ -154,7 +154,7 @@ class RobotRunner:
         # A policy (or a robot, for a discrete "stop" action) can end its own episode, as VLN agents do.
         if getattr(self.policy, "done", False) or getattr(self.robot, "stop_requested", False):
             return "policy"
-        if self.stop_on_goal and self.task.is_achieved(context.instance, self.robot.read_scene()):
+        if self.stop_on_goal and self.task.is_achieved(context.instance, read_scene(self.robot)):
             return "predicate"
         return None
 
@@ -192,7 +192,7 @@ class RobotRunner:
 
     def _scene_after(self, context: TrialContext, episode: Episode) -> Scene:
         if self.scene_io:
-            return self.robot.read_scene()
+            return read_scene(self.robot)
         robot = episode.path[-1] if episode.path else context.instance.scene.robot
         return Scene(dict(context.instance.scene.objects), robot)  # objects assumed where they were staged
 
@@ -235,7 +235,7 @@ class RobotRunner:
         # After a lost link the scene is unknown (a restarted simulator is empty): assume it is as staged.
         scene_after = context.instance.scene
         if self.scene_io and episode.ended_by == "estop":
-            scene_after = self.robot.read_scene()
+            scene_after = read_scene(self.robot)
         outcome = Outcome(
             success=False,
             steps=episode.steps,

@@ -19,12 +19,12 @@ import time
 from pathlib import Path
 
 from lerobot_robot_locobot import Locobot, LocobotConfig, one_hot
-from lerobot_robot_locobot.backend_sim import SimBackend
 from lerobot_robot_locobot.config_host import HostConfig, SimConfig
 from lerobot_robot_locobot.host import HostThread
 
 from lerobot_contrast.contrast.scene import Pose
 from lerobot_contrast.domains.vln.apartment import STUDIO, CameraSpec, Footprints, RayCaster, Room
+from lerobot_contrast.domains.vln.locobot_sim import SimBackend
 
 
 class FreshFrames(SimBackend):

@@ -73,3 +73,10 @@ def test_no_folder_imports_itself_back():
     folders = {(modules[a].parent, modules[b].parent) for a, b in import_graph()}
     named = {(str(a.relative_to(ROOT)), str(b.relative_to(ROOT))) for a, b in folders if a != b}
     assert _cycles(named) == []
+
+
+def test_the_locobot_plugin_imports_nothing_from_the_evaluator():
+    """The host finds its simulated apartment by entry point, and scenes cross to the evaluator as JSON."""
+    assert [
+        (a, b) for a, b in import_graph() if a.startswith("lerobot_robot_locobot.") and b.startswith("lerobot_contrast")
+    ] == []

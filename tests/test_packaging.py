@@ -8,7 +8,7 @@ import sys
 def test_the_three_distributions_are_installed_with_underscore_names():
     names = {d.metadata["Name"] for d in importlib.metadata.distributions()}
     assert {"lerobot_contrast", "lerobot_robot_locobot", "lerobot_policy_language_table"} <= names
-    assert "lerobot[dataset,viz]<0.7,>=0.6.1" in importlib.metadata.requires("lerobot_contrast")
+    assert "lerobot[dataset,training,viz]<0.7,>=0.6.1" in importlib.metadata.requires("lerobot_contrast")
 
 
 def test_lerobot_plugin_discovery_imports_both_plugins():

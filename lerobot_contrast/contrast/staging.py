@@ -3,7 +3,7 @@ moves to set it up, and the robots that can read and stage a scene themselves.""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
@@ -72,11 +72,18 @@ def staging_moves(current: Scene, target: Scene, tolerance: float = 0.005) -> li
 class SceneIO(Protocol):
     """A robot (simulated, or with a perception stack) that can report and set its scene.
 
-    The runner then stages scenes and judges predicates without asking the operator."""
+    The runner then stages scenes and judges predicates without asking the operator. A robot in another package
+    may report the scene as its JSON (`Scene.to_json`), so that it need not import this one."""
 
-    def read_scene(self) -> Scene: ...
+    def read_scene(self) -> Scene | Mapping[str, Any]: ...
 
     def stage_scene(self, scene: Scene) -> None: ...
+
+
+def read_scene(robot: SceneIO) -> Scene:
+    """The scene `robot` reports, as a Scene."""
+    scene = robot.read_scene()
+    return scene if isinstance(scene, Scene) else Scene.from_json(scene)
 
 
 def reports_scene(robot: Any, objects: Iterable[str] = ()) -> bool:

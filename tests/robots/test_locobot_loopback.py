@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from lerobot_robot_locobot import Locobot, LocobotConnectionError, SceneIOUnavailable, one_hot
 from lerobot_robot_locobot.backend_ros2 import Ros2Backend
-from lerobot_robot_locobot.backend_sim import SimBackend
 from lerobot_robot_locobot.config_host import HostConfig, Ros2Config, SimConfig
 from lerobot_robot_locobot.host import HostThread
 from lerobot_robot_locobot.keys import create_keys
 
 from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.domains.vln.locobot_sim import SimBackend
 from tests.robots.locobot_helpers import FREE_PORTS, ChaosProxy, CountingBackend, client_config, free_port
 from tests.robots.test_ros2_backend import FakeDriver
 
@@ -167,13 +167,13 @@ def test_scenes_are_staged_and_read_back_in_simulation(connect):
         assert robot.supports_scene_io
         scene = Scene({"couch": Pose(2.0, 2.0, 0.5), "lamp": Pose(6.0, 4.0)}, robot=Pose(5.0, 1.0, math.pi / 2))
         robot.stage_scene(scene)
-        assert robot.read_scene() == scene
+        assert Scene.from_json(robot.read_scene()) == scene
         observation = robot.get_observation()  # odometry reads in the scene frame from the staged pose
         assert (observation["odom.x"], observation["odom.y"], observation["odom.theta"]) == pytest.approx(
             (5.0, 1.0, math.pi / 2)
         )
         robot.send_action(one_hot("forward"))
-        assert robot.read_scene().robot.y == pytest.approx(1.25)
+        assert Scene.from_json(robot.read_scene()).robot.y == pytest.approx(1.25)
         with pytest.raises(Exception, match="collides with couch"):
             robot.stage_scene(scene.with_robot(Pose(2.0, 2.0)))
 

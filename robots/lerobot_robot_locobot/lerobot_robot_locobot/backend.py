@@ -4,12 +4,16 @@ Interbotix LoCoBot); each is imported only when selected, so the robot needs no 
 from __future__ import annotations
 
 from collections.abc import Hashable
+from importlib.metadata import entry_points
 from typing import Any, Protocol
 
 import numpy as np
 
 from lerobot_robot_locobot.config_host import BACKENDS
 from lerobot_robot_locobot.odometry import Pose2
+
+# Backends other packages provide: name = "module:Class", built from the host config's section of that name.
+BACKEND_GROUP = "lerobot_robot_locobot.backends"
 
 
 class Backend(Protocol):
@@ -56,10 +60,11 @@ class Backend(Protocol):
 
 def make_backend(name: str, config: Any) -> Backend:
     """The backend `name` built from the host config's section of the same name."""
-    if name == "sim":
-        from lerobot_robot_locobot.backend_sim import SimBackend
-
-        return SimBackend(config.sim)
+    if name == "sim":  # provided by lerobot_contrast, found by entry point so that this package never imports it
+        found = entry_points(group=BACKEND_GROUP, name="sim")
+        if not found:
+            raise ImportError("--backend=sim needs the lerobot_contrast package; install it or use --backend=ros2")
+        return next(iter(found)).load()(config.sim)
     if name == "ros2":
         from lerobot_robot_locobot.backend_ros2 import Ros2Backend
 

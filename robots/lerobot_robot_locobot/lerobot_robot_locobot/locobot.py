@@ -8,7 +8,7 @@ from __future__ import annotations
 import logging
 import math
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from lerobot.robots import Robot
@@ -18,9 +18,6 @@ from lerobot_robot_locobot.actions import POSE_KEYS, STATE_KEYS, action_features
 from lerobot_robot_locobot.config_locobot import LocobotConfig
 from lerobot_robot_locobot.link import HostLink, Received
 from lerobot_robot_locobot.protocol import decode_depth, decode_rgb
-
-if TYPE_CHECKING:
-    from lerobot_contrast.contrast.scene import Scene
 
 log = logging.getLogger(__name__)
 CAMERA = "front"
@@ -121,13 +118,11 @@ class Locobot(Robot):
         self._link.close()
         self._link = None
 
-    def read_scene(self) -> Scene:
-        """The furniture and the robot's pose as a lerobot_contrast Scene (sim backend only)."""
-        from lerobot_contrast.contrast.scene import Scene
+    def read_scene(self) -> dict[str, Any]:
+        """The furniture and the robot's pose, as a scene's JSON (sim backend only)."""
+        return self._scene_call("read_scene")["scene"]
 
-        return Scene.from_json(self._scene_call("read_scene")["scene"])
-
-    def stage_scene(self, scene: Scene) -> None:
+    def stage_scene(self, scene: Any) -> None:
         """Place the furniture and the robot as in `scene`; odometry then reads in the scene's frame."""
         self._scene_call("stage_scene", scene=scene.to_json())
         self.stop_requested = False

@@ -1,22 +1,21 @@
-"""The `sim` backend: the simulated studio apartment of lerobot_contrast, with a ray-cast RGB-D camera."""
+"""The LoCoBot host's `sim` backend: the simulated studio apartment, with a ray-cast RGB-D camera.
+
+The host finds it through the `lerobot_robot_locobot.backends` entry point, so the robot plugin imports nothing from
+this package; it implements the plugin's small `Backend` protocol (scenes cross it as JSON)."""
 
 from __future__ import annotations
 
 from collections.abc import Hashable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lerobot_robot_locobot.config_host import SimConfig
-from lerobot_robot_locobot.odometry import Pose2
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.domains.vln.apartment import STUDIO, Apartment, CameraSpec, RayCaster
 
-try:
-    from lerobot_contrast.contrast.scene import Pose, Scene
-    from lerobot_contrast.domains.vln.apartment import STUDIO, Apartment, CameraSpec, RayCaster
-except ImportError as error:  # the robot itself runs the ros2 backend and needs no simulator
-    raise ImportError(
-        f"--backend=sim needs the lerobot_contrast package ({error}); install it or use --backend=ros2"
-    ) from None
+if TYPE_CHECKING:
+    from lerobot_robot_locobot.config_host import SimConfig
+    from lerobot_robot_locobot.odometry import Pose2
 
 # Where the robot stands when the host starts, before a client stages a scene.
 START = Pose(4.0, 2.6, 0.0)
