@@ -7,6 +7,8 @@ import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import import_module
+from importlib.util import find_spec
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from lerobot_contrast.contrast.task import Task
@@ -16,6 +18,14 @@ if TYPE_CHECKING:
     from lerobot.robots import Robot
 
 PRETRAINED_BUILD = "lerobot_contrast.policies.pretrained:build"
+
+
+def _shipped_weights(package: str) -> str:
+    """The `weights/` directory a policy plugin ships, found without importing it (and so torch)."""
+    spec = find_spec(package)
+    if spec is None or not spec.submodule_search_locations:
+        raise ImportError(f"{package} is not installed; run scripts/setup.sh")
+    return str(Path(next(iter(spec.submodule_search_locations))) / "weights")
 
 
 @dataclass(frozen=True)
@@ -47,6 +57,14 @@ def register(entry: PolicyEntry) -> None:
 
 
 for _entry in (
+    PolicyEntry(
+        DEFAULT_POLICY,
+        PRETRAINED_BUILD,
+        "the learned default: a pixel policy trained on the simulator's demonstrations (weights ship with it)",
+        task="language_table",
+        reads_images=True,
+        path=_shipped_weights("lerobot_policy_tabletop_pointer"),
+    ),
     PolicyEntry(
         "oracle",
         "lerobot_contrast.policies.oracle:build",

@@ -35,16 +35,16 @@ Builder = Callable[["PolicyArgs", Any, Task, Mapping[str, str]], Policy]
 
 
 # The policy an evaluation runs when neither --policy.path nor --policy.type is given.
-DEFAULT_POLICY = "oracle"
+DEFAULT_POLICY = "tabletop_pointer"
 
 
 @dataclass
 class PolicyArgs:
     # A LeRobot policy to load: a directory written by save_pretrained, or a Hub repo id.
     path: str | None = None
-    # Without --policy.path: a registered policy (oracle: scripted push oracle with privileged state; random;
-    # route_follower: scripted VLN navigator), or a LeRobot policy type built fresh with random weights from
-    # the robot's features (for smoke tests).
+    # Without --policy.path: a registered policy (tabletop_pointer: the learned pixel policy whose weights ship;
+    # oracle: scripted push oracle with privileged state; random; route_follower: scripted VLN navigator), or a
+    # LeRobot policy type built fresh with random weights from the robot's features (for smoke tests).
     type: str | None = field(default=None, metadata={"help_default": DEFAULT_POLICY})
     # Torch device for a LeRobot policy (cpu, cuda, mps); default: the policy config's own.
     device: str | None = None

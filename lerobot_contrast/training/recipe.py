@@ -210,6 +210,10 @@ def ship(recipe: Recipe, weights_dir: Path) -> None:
     weights_dir.mkdir(parents=True, exist_ok=True)
     for path in _shipped_files(recipe.final_model()):
         shutil.copy2(path, weights_dir / path.name)
+    # The checkpoint it was fine-tuned from exists only on the training machine.
+    config = json.loads((weights_dir / "config.json").read_text())
+    config["pretrained_path"] = None
+    (weights_dir / "config.json").write_text(json.dumps(config, indent=4) + "\n")
 
 
 def _shipped_files(model_dir: Path) -> list[Path]:

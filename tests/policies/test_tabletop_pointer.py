@@ -69,7 +69,7 @@ def test_forward_returns_a_loss_that_trains_every_part():
     loss.backward()
     assert torch.isfinite(loss)
     assert {"heatmap", "position", "source", "anchor", "offset", "action", "goal_error_m"} <= set(info)
-    for name, module in (("heatmaps", policy.heatmaps), ("text", policy.instruction), ("action", policy.action_head)):
+    for name, module in (("heatmaps", policy.heatmaps), ("text", policy.instruction), ("action", policy.steering)):
         assert any(p.grad is not None and p.grad.abs().sum() > 0 for p in module.parameters()), name
 
 

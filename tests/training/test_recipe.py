@@ -57,6 +57,7 @@ def test_smoke_recipe_trains_with_lerobot_and_resumes_without_redoing_work(tmp_p
     ship(recipe, tmp_path / "weights")
     shipped = sorted(p.name for p in (tmp_path / "weights").iterdir())
     assert "model.safetensors" in shipped and "config.json" in shipped and "train_config.json" not in shipped
+    assert json.loads((tmp_path / "weights" / "config.json").read_text())["pretrained_path"] is None
 
 
 def test_a_steps_list_that_does_not_match_the_rounds_is_refused_in_one_line():

@@ -41,7 +41,7 @@ def _default_outputs() -> dict[str, PolicyFeature]:
 @dataclass
 class TabletopPointerConfig(PreTrainedConfig):
     """A pointer policy: per-object heatmaps from pixels, a text encoder that says which object to push and where,
-    and an MLP that turns effector, object and goal positions into an effector delta.
+    and an MLP that turns effector, object, goal and nearby-block positions into a heading and a speed.
 
     `observation.state` is (effector x, y, effector target x, y) in the board frame, as the simulator and the
     benchmark give it. The goal is read once per episode, from the first frame (`reset()` clears it).
@@ -69,6 +69,9 @@ class TabletopPointerConfig(PreTrainedConfig):
     word_dim: int = 32
     text_dim: int = 64
     head_hidden: int = 128
+    # The action is a heading among this many directions and a speed; the head also sees this many nearest blocks.
+    heading_bins: int = 16
+    obstacles: int = 2
     # Blocks closer than this to the pushed block are its "group" when the instruction names none.
     neighbour_radius: float = 0.08
     max_action: float = 0.1

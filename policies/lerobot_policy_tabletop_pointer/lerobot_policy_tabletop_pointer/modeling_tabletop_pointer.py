@@ -22,9 +22,9 @@ from lerobot_policy_tabletop_pointer.configuration_tabletop_pointer import (
     TabletopPointerConfig,
 )
 from lerobot_policy_tabletop_pointer.network import (
-    ActionHead,
     InstructionEncoder,
     ObjectHeatmaps,
+    SteeringHead,
     apply_homography,
     soft_argmax,
 )
@@ -36,6 +36,13 @@ def resize_image(image: Tensor, height: int, width: int) -> Tensor:
     if image.shape[-2:] == (height, width):
         return image
     return F.interpolate(image, size=(height, width), mode="area")
+
+
+def nearest_blocks(positions: Tensor, present: Tensor, source: Tensor, effector: Tensor, n: int) -> Tensor:
+    """(B, n, 2) positions of the n present blocks nearest the effector, other than the pushed one (weights `source`)."""
+    distance = (positions - effector.unsqueeze(1)).norm(dim=-1) + (1 - present) * 10 + source * 10
+    index = distance.topk(n, largest=False).indices
+    return positions.gather(1, index.unsqueeze(-1).expand(-1, -1, 2))
 
 
 def _privileged(batch: dict[str, Any], name: str) -> Tensor:
@@ -55,7 +62,7 @@ class TabletopPointerPolicy(PreTrainedPolicy):
         n = len(config.objects)
         self.heatmaps = ObjectHeatmaps(n, config.channels)
         self.instruction = InstructionEncoder(self.tokenizer.size, n, config.word_dim, config.text_dim)
-        self.action_head = ActionHead(config.head_hidden)
+        self.steering = SteeringHead(config.head_hidden, config.heading_bins, config.obstacles)
         matrix = torch.tensor(config.image_to_board, dtype=torch.float32)
         self.register_buffer("image_to_board", matrix, persistent=False)
         self.register_buffer("board_to_image", torch.linalg.inv(matrix), persistent=False)
@@ -114,8 +121,11 @@ class TabletopPointerPolicy(PreTrainedPolicy):
         if self._goal is None or self._goal.shape != goal.shape:
             self._goal = goal
         effector = batch[STATE_KEY][:, 2:4].float()
-        action = self.action_head(effector, source, self._goal) * self.config.max_action
-        return action.clamp(-self.config.max_action, self.config.max_action)
+        source_weights = (seen["source"] + torch.log(torch.sigmoid(seen["presence"]) + 1e-6)).softmax(-1)
+        present = (seen["presence"] > 0).float()
+        obstacles = nearest_blocks(seen["positions"], present, source_weights, effector, self.config.obstacles)
+        action = self.steering.action(*self.steering(effector, source, self._goal, obstacles))
+        return (action * self.config.max_action).clamp(-self.config.max_action, self.config.max_action)
 
     def predict_action_chunk(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
         return self.select_action(batch).unsqueeze(1)
@@ -158,7 +168,7 @@ class TabletopPointerPolicy(PreTrainedPolicy):
         }
 
     def _action_loss(self, batch: dict[str, Any], seen: dict[str, Tensor]) -> Tensor:
-        """The action head learns from true positions (with noise) and, at `predicted_input_rate`, the predicted
+        """The steering head learns from true positions (with noise) and, at `predicted_input_rate`, the predicted
         pushed-object position, so it neither depends on perfect perception nor learns from early garbage alone."""
         b, k = seen["source"].shape
         truth = _privileged(batch, "objects_xy").view(b, k, 2)
@@ -169,5 +179,11 @@ class TabletopPointerPolicy(PreTrainedPolicy):
         source = torch.where(use_seen, source_seen, source_true + noise * torch.randn_like(source_true))
         goal = _privileged(batch, "goal_xy") + noise * torch.randn_like(source_true)
         effector = batch[STATE_KEY][:, 2:4].float()
-        predicted = self.action_head(effector, source, goal)
-        return F.mse_loss(predicted, batch[ACTION_KEY].float() / self.config.max_action, reduction="sum") / b
+        present = _privileged(batch, "objects_present")
+        noisy = truth + noise * torch.randn_like(truth)
+        obstacles = nearest_blocks(noisy, present, _privileged(batch, "source"), effector, self.config.obstacles)
+        logits, speed = self.steering(effector, source, goal, obstacles)
+        target = batch[ACTION_KEY].float() / self.config.max_action
+        moving = (target.norm(dim=-1) > 1e-3).float()
+        heading = F.cross_entropy(logits, self.steering.heading_bin(target), reduction="none")
+        return (heading * moving).sum() / moving.sum().clamp(min=1) + F.mse_loss(speed, target.norm(dim=-1)) * 10

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import torch
 from torch import Tensor, nn
 from torch.nn import functional as F  # noqa: N812
@@ -92,24 +94,48 @@ class InstructionEncoder(nn.Module):
         }
 
 
-class ActionHead(nn.Module):
-    """Effector target, pushed-object and goal positions (metres) -> the next effector delta, in units of max_action."""
+class SteeringHead(nn.Module):
+    """Effector target, pushed-object, goal and nearby-block positions (metres) -> a heading and a speed.
 
-    def __init__(self, hidden: int) -> None:
+    The heading is a choice among `bins` directions, not a regressed vector: where the demonstrations go around a
+    block on either side, a regressed mean would point into it (or stand still), while the most likely bin picks a side.
+    """
+
+    def __init__(self, hidden: int, bins: int, obstacles: int) -> None:
         super().__init__()
+        self.bins = bins
         self.net = nn.Sequential(
-            nn.Linear(14, hidden),
+            nn.Linear(14 + 3 * obstacles, hidden),
             nn.ReLU(inplace=True),
             nn.Linear(hidden, hidden),
             nn.ReLU(inplace=True),
             nn.Linear(hidden, hidden),
             nn.ReLU(inplace=True),
-            nn.Linear(hidden, 2),
+            nn.Linear(hidden, bins + 1),
         )
+        angles = torch.arange(bins) * (2 * math.pi / bins)
+        self.register_buffer("headings", torch.stack([angles.cos(), angles.sin()], dim=-1), persistent=False)
 
-    def forward(self, effector: Tensor, source: Tensor, goal: Tensor) -> Tensor:
+    def forward(self, effector: Tensor, source: Tensor, goal: Tensor, obstacles: Tensor) -> tuple[Tensor, Tensor]:
+        """(heading logits (B, bins), speed (B,) in units of max_action)."""
         to_source, to_goal = source - effector, goal - source
         features = [effector - effector.new_tensor((0.375, 0.0)), to_source, to_goal, goal - effector]
         norms = [to_source.norm(dim=-1, keepdim=True), to_goal.norm(dim=-1, keepdim=True)]
         directions = [to_source / norms[0].clamp(min=1e-3), to_goal / norms[1].clamp(min=1e-3)]
-        return self.net(torch.cat([*(f * 10 for f in features), *(n * 10 for n in norms), *directions], dim=-1))
+        near = obstacles - effector.unsqueeze(1)
+        scaled = [*(f * 10 for f in features), *(n * 10 for n in norms), *directions]
+        out = self.net(torch.cat([*scaled, near.flatten(1) * 10, near.norm(dim=-1) * 10], dim=-1))
+        return out[:, : self.bins], out[:, self.bins]
+
+    def heading_bin(self, action: Tensor) -> Tensor:
+        """The bin of each action's direction."""
+        return (action @ self.headings.T).argmax(-1)
+
+    def action(self, logits: Tensor, speed: Tensor) -> Tensor:
+        """The most likely bin's heading, refined by its two neighbours' probabilities, times the speed."""
+        probs = logits.softmax(-1)
+        best = probs.argmax(-1, keepdim=True)
+        window = (best + torch.tensor([-1, 0, 1], device=logits.device)) % self.bins
+        heading = (probs.gather(1, window).unsqueeze(-1) * self.headings[window]).sum(1)
+        heading = heading / heading.norm(dim=-1, keepdim=True).clamp(min=1e-6)
+        return heading * speed.clamp(min=0).unsqueeze(-1)

@@ -1,0 +1,49 @@
+"""The shipped `tabletop_pointer` weights: they load through LeRobot's own factory and still push blocks.
+
+A regression check on a small fixed set, not the benchmark: the README's figures come from
+`scripts/train_default_policy.py` on 250 fresh instances.
+"""
+
+import numpy as np
+import pytest
+import torch
+from lerobot.configs import PreTrainedConfig
+from lerobot.policies import get_policy_class, make_pre_post_processors
+from lerobot_policy_tabletop_pointer import WEIGHTS, TabletopPointerPolicy
+
+from lerobot_contrast.domains.language_table.task import LanguageTableTask
+from lerobot_contrast.training.episodes import Simulator
+from lerobot_contrast.training.learner import Learner, closed_loop
+
+# Success of the shipped weights on these 30 instances when they were shipped, less a margin for platform noise.
+SUCCESS_FLOOR = 0.4
+
+
+def test_shipped_files_are_small_and_complete():
+    names = {p.name for p in WEIGHTS.iterdir()}
+    assert {"config.json", "model.safetensors", "policy_preprocessor.json", "policy_postprocessor.json"} <= names
+    assert sum(p.stat().st_size for p in WEIGHTS.iterdir()) < 20e6
+
+
+def test_shipped_policy_loads_through_lerobot_factories():
+    config = PreTrainedConfig.from_pretrained(WEIGHTS)
+    policy = get_policy_class(config.type).from_pretrained(WEIGHTS, config=config)
+    assert isinstance(policy, TabletopPointerPolicy) and policy.config.vocabulary
+    preprocessor, postprocessor = make_pre_post_processors(config, pretrained_path=str(WEIGHTS))
+    batch = preprocessor(
+        {
+            "observation.images.top": torch.rand(3, 180, 320),
+            "observation.state": torch.tensor([0.3, 0.0, 0.3, 0.0]),
+            "task": "push the red moon to the blue cube",
+        }
+    )
+    action = postprocessor(policy.select_action(batch))
+    assert action.shape == (1, 2) and action.abs().max() <= 0.1
+
+
+@pytest.mark.slow
+def test_shipped_policy_clears_its_success_floor():
+    torch.set_num_threads(1)
+    instances = LanguageTableTask().sample(30, np.random.default_rng(20261125))
+    figures = closed_loop(Learner(WEIGHTS), Simulator(LanguageTableTask()), instances, max_steps=200)
+    assert figures["success"] >= SUCCESS_FLOOR, figures
