@@ -151,3 +151,44 @@ def test_loading_refuses_a_robot_without_the_policys_camera(act_path):
     robot = LanguageTableSim(LanguageTableSimConfig(camera=False))
     with pytest.raises(PolicyLoadError, match="observation.images.top"):
         PretrainedPolicy(robot, str(act_path))
+
+
+@pytest.mark.parametrize("value", ["/nonexistent", "./no/model", "~/no-model", "runs/no/model"])
+def test_a_path_like_policy_path_that_exists_nowhere_is_no_such_directory(tmp_path, capsys, value):
+    assert main(["--n_instances=1", f"--policy.path={value}", f"--output_dir={tmp_path / 'run'}"]) == 2
+    err = capsys.readouterr().err
+    assert err == f"error: --policy.path: no such directory: {value}\n"
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_policy_whose_state_does_not_fit_the_robot_is_refused_before_the_run_directory(tmp_path, capsys):
+    policy = save_act(tmp_path / "act2")
+    config = json.loads((policy / "config.json").read_text())
+    config["input_features"]["observation.state"]["shape"] = [2]
+    (policy / "config.json").write_text(json.dumps(config))
+    run = tmp_path / "run"
+    assert main(["--n_instances=1", "--max_episode_steps=3", f"--policy.path={policy}", f"--output_dir={run}"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "observation.state" in err and "(2,)" in err and "(4,)" in err
+    assert not run.exists()
+
+
+def test_images_of_another_size_are_refused_unless_the_policy_resizes_them():
+    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.policies import make_policy_config
+
+    from lerobot_contrast.policies.pretrained import _check_inputs, robot_dataset_features
+
+    features = robot_dataset_features(LanguageTableSim(LanguageTableSimConfig()))  # a 180x320 camera
+    small = {
+        "observation.images.top": PolicyFeature(type=FeatureType.VISUAL, shape=(3, 72, 128)),
+        "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(4,)),
+    }
+    pointer = make_policy_config("tabletop_pointer", input_features=dict(small))  # resizes any frame to 72x128
+    _check_inputs(pointer, features, {})
+    act = make_policy_config("act", input_features=dict(small))
+    with pytest.raises(PolicyLoadError, match=r"observation.images.top has shape \(3, 72, 128\).*\(3, 180, 320\)"):
+        _check_inputs(act, features, {})
+    grey = {**small, "observation.images.top": PolicyFeature(type=FeatureType.VISUAL, shape=(1, 72, 128))}
+    with pytest.raises(PolicyLoadError, match=r"\(1, 72, 128\)"):
+        _check_inputs(make_policy_config("tabletop_pointer", input_features=grey), features, {})

@@ -7,6 +7,7 @@ is refused up front, with the keys to map through `--rename_map`.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -14,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import torch
 from lerobot.common.control_utils import predict_action
 from lerobot.configs import PreTrainedConfig
+from lerobot.configs.types import FeatureType
 from lerobot.policies import get_policy_class, make_policy_config, make_pre_post_processors
 from lerobot.policies.utils import make_robot_action
 from lerobot.utils.feature_utils import build_dataset_frame, dataset_to_policy_features, hw_to_dataset_features
@@ -43,7 +45,15 @@ def robot_dataset_features(robot: Robot) -> dict[str, dict]:
     }
 
 
+def looks_like_path(value: str) -> bool:
+    """Absolute, `.`/`~`-led, or with more separators than a Hub repo id (`user/name`) has."""
+    slashes = value.count("/") + (value.count(os.sep) if os.sep != "/" else 0)
+    return Path(value).is_absolute() or value.startswith((".", "~")) or slashes > 1
+
+
 def _load_config(path: str, device: str | None) -> PreTrainedConfig:
+    if looks_like_path(path) and not Path(path).expanduser().exists():
+        raise PolicyLoadError(f"--policy.path: no such directory: {path}")
     try:
         config = PreTrainedConfig.from_pretrained(path)
     except Exception as error:
@@ -95,6 +105,25 @@ def _check_inputs(config: PreTrainedConfig, features: dict[str, dict], rename_ma
             f"(it gives {', '.join(sorted(provided))}); map robot keys to them with "
             '--rename_map=\'{"observation.images.ROBOT_CAMERA": "POLICY_KEY"}\''
         )
+    given = {rename_map.get(key, key): feature for key, feature in dataset_to_policy_features(features).items()}
+    for key, wanted in config.input_features.items():
+        expected, actual = tuple(wanted.shape), tuple(given[key].shape)
+        if expected == actual or (wanted.type is FeatureType.VISUAL and _resizes(config, expected, actual)):
+            continue
+        raise PolicyLoadError(
+            f"the policy's {key} has shape {expected} but the robot gives {actual}; "
+            "use a policy trained on this robot's features"
+        )
+
+
+# Config fields by which a policy declares the image size it resizes any frame to before its network sees it.
+RESIZE_FIELDS = ("resize_shape", "image_resize_shape", "resize_imgs_with_padding", "image_height")
+
+
+def _resizes(config: PreTrainedConfig, expected: tuple[int, ...], actual: tuple[int, ...]) -> bool:
+    """Same channels, another size, and a policy that resizes frames itself: adapted, not refused."""
+    same_channels = len(expected) == len(actual) == 3 and expected[0] == actual[0]
+    return same_channels and any(getattr(config, name, None) is not None for name in RESIZE_FIELDS)
 
 
 class PretrainedPolicy:
