@@ -209,6 +209,10 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def plural(n: int, noun: str) -> str:
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 def review(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     records = select(load_records(args.run_dir), args.perturbation, args.outcome, args.base)
@@ -218,7 +222,8 @@ def review(argv: Sequence[str] | None = None) -> int:
     merged, missing = merge_episodes(args.run_dir, records, output)
     if missing:
         print(f"warning: {len(missing)} episode file(s) missing, left out: {', '.join(missing)}", file=sys.stderr)
-    print(f"{len(records) - len(missing)} episodes of {len({r.base_id for r in records})} base instances: {merged}")
+    episodes, bases = len(records) - len(missing), len({r.base_id for r in records})
+    print(f"{plural(episodes, 'episode')} of {plural(bases, 'base instance')}: {merged}")
     if args.save_only:
         return 0
     return open_viewer(merged, args.web, args.web_port, args.grpc_port)

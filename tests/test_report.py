@@ -106,3 +106,12 @@ def test_the_module_runs_as_a_command(tmp_path):
         and result.stderr
         == f"error: {tmp_path / 'nope'}: no such run directory; pass directories written by lerobot_contrast.eval\n"
     )
+
+
+def test_a_value_that_rounds_to_zero_has_no_sign_in_report_md():
+    from lerobot_contrast.reporting.markdown import fmt, num
+    from lerobot_contrast.reporting.stats import Estimate
+
+    assert fmt(Estimate(-0.0, -0.0001, 0.0, 3, 3, "cluster_bootstrap")) == "0.000 [0.000, 0.000]"
+    assert fmt(Estimate(-0.25, -0.5, -0.0004, 3, 3, "cluster_bootstrap")) == "-0.250 [-0.500, 0.000]"
+    assert num(-0.0002, "+.3f") == "+0.000"

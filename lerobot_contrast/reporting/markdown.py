@@ -24,11 +24,16 @@ def table(header: list[str], rows: list[list[str]]) -> list[str]:
     return lines + ["| " + " | ".join(row) + " |" for row in rows]
 
 
+def num(x: float, spec: str = ".3f") -> str:
+    """`x` to three decimals, with no `-0.000`: a value that rounds to zero has no sign."""
+    return format(round(x, 3) + 0.0, spec)
+
+
 def fmt(e: stats.Estimate | None, with_n: bool = False) -> str:
     if e is None or e.n_trials == 0:
         return "-"
-    interval = "" if math.isnan(e.low) else f" [{e.low:.3f}, {e.high:.3f}]"
-    return f"{e.mean:.3f}{interval}" + (f" (n={e.n_trials})" if with_n else "")
+    interval = "" if math.isnan(e.low) else f" [{num(e.low)}, {num(e.high)}]"
+    return f"{num(e.mean)}{interval}" + (f" (n={e.n_trials})" if with_n else "")
 
 
 def summary_section(rows: list[SummaryRow], unit: str) -> list[str]:
@@ -81,8 +86,8 @@ def versus_section(versus: list[VersusFull], metric: str, unit: str, why_missing
     ]
     body = [
         [v.label, str(v.seeds), f"{v.reference_costs.mean():.1f}", f"{v.trials_at_reference.mean():.0f}"]
-        + [f"{(v.trials_at_reference / v.reference_trials).mean():.2f}", f"{v.signed_at_reference.mean():+.3f}"]
-        + [f"{v.error_at_reference:.3f}", f"{v.error_at_end:.3f}"]
+        + [f"{(v.trials_at_reference / v.reference_trials).mean():.2f}", num(v.signed_at_reference.mean(), "+.3f")]
+        + [num(v.error_at_reference), num(v.error_at_end)]
         for v in versus
     ]
     return lines + ["", *table(header, body), ""]

@@ -66,7 +66,7 @@ def test_a_missing_episode_file_is_reported_and_left_out(recorded_run, tmp_path,
     assert review.main([str(run), "--perturbation=original,LB1", f"--base={first.base_id}", "--save_only"]) == 0
     out, err = capsys.readouterr()
     assert f"1 episode file(s) missing, left out: {first.rerun_path}" in err
-    assert "1 episodes of 1 base instances" in out and (run / "review" / "review.rrd").is_file()
+    assert "1 episode of 1 base instance:" in out and (run / "review" / "review.rrd").is_file()
 
 
 @pytest.mark.parametrize(

@@ -1,0 +1,66 @@
+"""Every command in the README's shell blocks stays true: each `python -m` module runs, as a dry run or `--help`."""
+
+import re
+import runpy
+import shlex
+import sys
+from pathlib import Path
+
+import pytest
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+TEXT = README.read_text(encoding="utf-8")
+
+
+def shell_commands() -> list[list[str]]:
+    """The README's bash blocks as commands split into words: continuations joined, comments and placeholders
+    (`<...>`, `[...]`, `...`) dropped, `a && b` as two commands."""
+    blocks = re.findall(r"^ *```bash\n(.*?)^ *```", TEXT, flags=re.S | re.M)
+    lines = "\n".join(blocks).replace("\\\n", " ").splitlines()
+    commands = []
+    for line in lines:
+        words = [
+            w for w in shlex.split(re.sub(r"<[^>]*>|\[[^\]]*\]", "", line), comments=True) if w not in ("...", "&")
+        ]
+        while "&&" in words:
+            commands.append(words[: words.index("&&")])
+            words = words[words.index("&&") + 1 :]
+        commands.append(words)
+    return [c for c in commands if c]
+
+
+def python_commands() -> list[list[str]]:
+    """`MODULE ARGS...` of each `python -m` command (but `-m venv`)."""
+    return [c[2:] for c in shell_commands() if c[0].endswith("python") and c[1] == "-m"]
+
+
+def as_check(module: str, args: list[str]) -> list[str]:
+    """An evaluation runs as a dry run (it plans, needs no robot, policy or network); everything else as --help."""
+    if module == "lerobot_contrast.eval" and "--help" not in args and not any("hub:" in a for a in args):
+        return [a for a in args if not a.startswith("--dry_run")] + ["--dry_run=true"]
+    return ["--help"]
+
+
+def test_every_python_command_in_the_readme_uses_the_virtual_environment():
+    bare = [c for c in shell_commands() if "python" in c[0] and c[0] != ".venv/bin/python" and c[1:3] != ["-m", "venv"]]
+    assert not bare, f"commands outside .venv/bin/python: {bare}"
+
+
+def test_the_readme_names_the_commands_it_should():
+    modules = {command[0] for command in python_commands()}
+    assert {"lerobot_contrast.eval", "lerobot_contrast.review", "lerobot_contrast.report"} <= modules
+    assert "lerobot_robot_locobot.host" in modules
+
+
+@pytest.mark.parametrize("command", python_commands(), ids=lambda c: " ".join(c)[:80])
+def test_each_readme_command_runs_in_dry_run_or_help_form(command, tmp_path, monkeypatch, capsys):
+    module, args = command[0], as_check(command[0], command[1:])
+    monkeypatch.chdir(tmp_path)
+    yaml_blocks = re.findall(r"```yaml\n(.*?)```", TEXT, flags=re.S)
+    (tmp_path / "my_table.yaml").write_text(yaml_blocks[0], encoding="utf-8")  # the README's complete task file
+    monkeypatch.setattr(sys, "argv", [module, *args])
+    with pytest.raises(SystemExit) as exited:
+        runpy.run_module(module, run_name="__main__", alter_sys=True)
+        raise SystemExit(0)
+    out, err = capsys.readouterr()
+    assert exited.value.code in (0, None), f"{module} {' '.join(args)} exited {exited.value.code}: {err[-500:]}"
