@@ -115,3 +115,22 @@ def test_a_value_that_rounds_to_zero_has_no_sign_in_report_md():
     assert fmt(Estimate(-0.0, -0.0001, 0.0, 3, 3, "cluster_bootstrap")) == "0.000 [0.000, 0.000]"
     assert fmt(Estimate(-0.25, -0.5, -0.0004, 3, 3, "cluster_bootstrap")) == "-0.250 [-0.500, 0.000]"
     assert num(-0.0002, "+.3f") == "+0.000"
+
+
+def test_the_sensitivity_figure_gives_each_bar_its_n_and_marks_no_trials_n_a():
+    from lerobot_contrast.reporting.figures import perturbation_plot
+    from lerobot_contrast.reporting.stats import Estimate
+
+    nan = float("nan")
+    table = {
+        "contrast": {
+            "original": Estimate(0.5, 0.2, 0.8, 4, 4, "cluster_bootstrap"),
+            "LB1": Estimate(0.0, 0.0, 0.0, 1, 1, "cluster_bootstrap"),  # scored 0: a bar of 0 with its n
+            "SB1": Estimate(nan, nan, nan, 0, 0, "none"),  # no trials
+        }
+    }
+    fig = perturbation_plot(table, ["original", "LB1", "SB1", "SB2"], "spl", None, {"contrast": "C0"})
+    texts = {(round(t.get_position()[0]), t.get_text()) for t in fig.axes[0].texts}
+    assert texts == {(0, "n=4"), (1, "n=1"), (2, "n/a")}
+    bars = [patch.get_x() + patch.get_width() / 2 for patch in fig.axes[0].patches]
+    assert [round(x) for x in bars] == [0, 1]

@@ -39,16 +39,36 @@ def perturbation_figure(
     path: Path,
 ) -> Path:
     """Mean metric per perturbation with 95% intervals, one bar per group (the paper's left panels)."""
+    return _save(perturbation_plot(table, order, metric, full, colors), path)
+
+
+def perturbation_plot(
+    table: dict[str, dict[str, stats.Estimate]],
+    order: list[str],
+    metric: str,
+    full: float | None,
+    colors: dict[str, str],
+) -> Figure:
+    """Each bar carries its n; a perturbation a group has no trials of reads "n/a" (a bar of 0 would be a score)."""
     names = [n for n in order if any(n in per for per in table.values())]
     width = 0.8 / max(len(table), 1)
     fig = Figure(figsize=(max(6.0, 1.1 * len(names) + 3.0), 4.2))
     ax = fig.add_subplot()
     for k, (label, per) in enumerate(table.items()):
-        xs = [i + (k - (len(table) - 1) / 2) * width for i, n in enumerate(names) if n in per]
-        est = [per[n] for n in names if n in per]
+        offset = (k - (len(table) - 1) / 2) * width
+        shown = [(i + offset, per[n]) for i, n in enumerate(names) if n in per and per[n].n_trials > 0]
+        for x in [i + offset for i, n in enumerate(names) if n not in per or per[n].n_trials == 0]:
+            ax.text(x, 0.01, "n/a", ha="center", va="bottom", fontsize=7, rotation=90, color=colors[label])
+        if not shown:
+            ax.bar([], [], width, color=colors[label], label=label)  # the group keeps its legend entry
+            continue
+        xs, est = zip(*shown, strict=True)
         means = np.array([e.mean for e in est])
         err = np.array([[e.mean - e.low for e in est], [e.high - e.mean for e in est]])
         ax.bar(xs, means, width, yerr=np.nan_to_num(err), capsize=3, color=colors[label], label=label)
+        for x, e in shown:
+            top = max(e.mean, e.high) if np.isfinite(e.high) else e.mean
+            ax.text(x, min(top, 0.97) + 0.01, f"n={e.n_trials}", ha="center", va="bottom", fontsize=6)
     if full is not None:
         ax.axhline(full, color="black", linestyle="--", linewidth=1, label=f"full i.i.d. evaluation ({full:.3f})")
     ax.set_xticks(range(len(names)), [_name(n) for n in names])
@@ -56,7 +76,7 @@ def perturbation_figure(
     ax.set_ylabel(f"mean {METRIC_NAMES[metric]} (95% interval)")
     ax.set_ylim(0.0, 1.05)
     ax.set_title(f"{METRIC_NAMES[metric]} per perturbation")
-    return _save(fig, path)
+    return fig
 
 
 def error_figure(
