@@ -10,6 +10,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.metrics import METRICS
 from lerobot_contrast.record.hub import parse_hub_spec
 from lerobot_contrast.reporting import build_report, load_run
+from lerobot_contrast.reporting.runs import distinct_runs
 
 
 class ReportArgsError(UserError):
@@ -53,8 +54,11 @@ def default_output_dir(specs: list[str], runs: list) -> Path:
 def main(argv: list[str] | None = None) -> int:
     try:
         args = parser().parse_args(argv)
-        runs = [load_run(spec) for spec in args.runs]
-        output_dir = args.output_dir or default_output_dir(args.runs, runs)
+        given = [load_run(spec) for spec in args.runs]
+        output_dir = args.output_dir or default_output_dir(args.runs, given)
+        runs, repeats = distinct_runs(args.runs, given)
+        for line in repeats:
+            print(f"note: {line}")
         try:
             path = build_report(runs, output_dir, args.metric).path
         except OSError as error:

@@ -134,3 +134,26 @@ def test_the_sensitivity_figure_gives_each_bar_its_n_and_marks_no_trials_n_a():
     assert texts == {(0, "n=4"), (1, "n=1"), (2, "n/a")}
     bars = [patch.get_x() + patch.get_width() / 2 for patch in fig.axes[0].patches]
     assert [round(x) for x in bars] == [0, 1]
+
+
+def test_the_same_run_given_twice_is_counted_once_and_named_in_one_line(tmp_path, capsys):
+    run = tmp_path / "run"
+    flags = ["--n_instances=2", "--policy.type=oracle", "--perturbations=[LB1]", "--rerun=false"]
+    assert eval_main([*flags, "--max_episode_steps=20", f"--output_dir={run}"]) == 0
+    copy = tmp_path / "downloaded"  # as a hub: copy lands elsewhere, holding the same files
+    shutil.copytree(run, copy)
+    (copy / "journal.jsonl").unlink()  # read from results.parquet instead, as a publication may be
+    capsys.readouterr()
+    assert main([str(run), str(copy), str(run), f"--output_dir={tmp_path / 'report'}"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    notes = [line for line in out if line.startswith("note: ")]
+    assert notes == [
+        f"note: {copy} is the same run as {run}; it is counted once",
+        f"note: {run} is the same run as {run}; it is counted once",
+    ]
+    text = (tmp_path / "report" / "report.md").read_text()
+    rows = [line for line in text.splitlines() if line.startswith("| contrast")]
+    assert len(rows) == 1 and "| 0 |" in rows[0]  # seed 0, once, and no pooled row of two "seeds"
+    other = tmp_path / "other"
+    assert eval_main([*flags, "--max_episode_steps=20", "--seed=1", f"--output_dir={other}"]) == 0
+    assert load_run(str(other)).identity != load_run(str(run)).identity

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,6 +21,9 @@ from lerobot_contrast.reporting.stats import frame
 # Settings that say how a run was recorded or where its plan came from, not what it evaluated (besides those
 # a run may change between sessions, see comparable_settings).
 RECORDING_KEYS = ("plan", "rerun", "record_dataset")
+# Columns that, with the config, identify a run: the same trials started at the same times are the same run,
+# whether read from a local directory or its copy downloaded from the Hub.
+IDENTITY_COLUMNS = ("index", "instance_id", "status", "started_at", "cost", "success", "spl", "progress")
 # Settings a strategy may differ in from the standard run that serves as its full i.i.d. reference.
 STRATEGY_KEYS = ("strategy", "perturbations", "order", "budget")
 
@@ -56,6 +60,14 @@ class Run:
         )
 
     @property
+    def identity(self) -> str:
+        """A hash of the config and the trials (ids, outcomes, start times), the same for a run and its Hub copy."""
+        trials = self.results[[c for c in IDENTITY_COLUMNS if c in self.results]].sort_values("index")
+        config = json.dumps(self.config, sort_keys=True, default=str)
+        rows = trials.astype(str).to_json(orient="values")
+        return hashlib.sha256(f"{config}\n{rows}".encode()).hexdigest()
+
+    @property
     def is_full_iid(self) -> bool:
         """A complete, unbudgeted standard evaluation: the reference the other strategies are judged against."""
         return self.config.get("strategy") == "standard" and self.config.get("budget") is None and self.complete
@@ -75,6 +87,19 @@ def load_run(spec: str) -> Run:
     config = _read_json(config_path)
     summary = _read_json(path / "summary.json") if (path / "summary.json").exists() else {}
     return Run(path=path, config=config, summary=summary, results=_read_trials(path))
+
+
+def distinct_runs(specs: list[str], runs: list[Run]) -> tuple[list[Run], list[str]]:
+    """Each run once, however many times it was given (locally, from the Hub, or both); and one line per repeat."""
+    first: dict[str, str] = {}
+    kept, notes = [], []
+    for spec, run in zip(specs, runs, strict=True):
+        if run.identity in first:
+            notes.append(f"{spec} is the same run as {first[run.identity]}; it is counted once")
+            continue
+        first[run.identity] = spec
+        kept.append(run)
+    return kept, notes
 
 
 def _read_json(path: Path) -> dict[str, Any]:
