@@ -18,8 +18,8 @@ from lerobot_contrast.record.observer import EpisodeObserver
 if TYPE_CHECKING:
     from lerobot.robots import Robot
 
-# The robot each task runs on when no --robot is given: a simulator, or the LoCoBot host's sim backend.
-TASK_ROBOTS = {"language_table": "language_table_sim", "vln": "locobot"}
+# The robot each task runs on when no --robot is given: an in-process simulator.
+TASK_ROBOTS = {"language_table": "language_table_sim", "vln": "vln_sim"}
 OPERATORS = ("auto", "console")
 DEFAULT_HARDWARE_FPS = 10.0
 
@@ -30,6 +30,7 @@ def register_robots() -> dict[str, str]:
     from lerobot.utils.import_utils import register_third_party_plugins
 
     import lerobot_contrast.domains.language_table.config_language_table_sim  # noqa: F401
+    import lerobot_contrast.domains.vln.config_vln_sim  # noqa: F401
 
     unavailable = {}
     for family in ("lerobot.robots", "lerobot.cameras"):
@@ -72,7 +73,7 @@ def choose_robot(cfg: EvalConfig) -> None:
     if cfg.task not in TASK_ROBOTS:
         raise ConfigError(f"--task={cfg.task} has no simulator; name your robot with --robot.type=...")
     robot_class = RobotConfig.get_choice_class(TASK_ROBOTS[cfg.task])
-    cfg.robot = robot_class(camera=needs_camera(cfg)) if cfg.task == "language_table" else robot_class()
+    cfg.robot = robot_class(camera=needs_camera(cfg))
 
 
 def make_robot(cfg: EvalConfig) -> Any:

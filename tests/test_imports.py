@@ -12,6 +12,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = [
     ROOT / "lerobot_contrast",
     ROOT / "robots" / "lerobot_robot_locobot" / "lerobot_robot_locobot",
+    ROOT / "protocols" / "navigation_protocol" / "navigation_protocol",
 ]
 
 
@@ -75,8 +76,18 @@ def test_no_folder_imports_itself_back():
     assert _cycles(named) == []
 
 
+def _crossing(source: str, target: str) -> list[tuple[str, str]]:
+    return [(a, b) for a, b in import_graph() if a.startswith(source) and b.startswith(target)]
+
+
 def test_the_locobot_plugin_imports_nothing_from_the_evaluator():
     """The host finds its simulated apartment by entry point, and scenes cross to the evaluator as JSON."""
-    assert [
-        (a, b) for a, b in import_graph() if a.startswith("lerobot_robot_locobot.") and b.startswith("lerobot_contrast")
-    ] == []
+    assert _crossing("lerobot_robot_locobot", "lerobot_contrast") == []
+
+
+def test_the_evaluator_imports_nothing_from_the_locobot_plugin():
+    """VLN in simulation runs on the in-process vln_sim robot; both sides share only navigation_protocol."""
+    assert _crossing("lerobot_contrast", "lerobot_robot_locobot") == []
+    assert _crossing("navigation_protocol", "lerobot_") == []
+    assert _crossing("lerobot_contrast", "navigation_protocol") != []
+    assert _crossing("lerobot_robot_locobot", "navigation_protocol") != []

@@ -20,3 +20,11 @@ def test_lerobot_plugin_discovery_imports_both_plugins():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["True", "True"]
+
+
+def test_the_evaluator_and_the_locobot_plugin_both_depend_on_the_navigation_protocol_only():
+    """Neither distribution requires the other for VLN: what they share is the small navigation_protocol."""
+    for name in ("lerobot_contrast", "lerobot_robot_locobot"):
+        assert "navigation_protocol" in importlib.metadata.requires(name)
+    assert importlib.metadata.requires("navigation_protocol") is None
+    assert "lerobot_contrast" not in " ".join(importlib.metadata.requires("lerobot_robot_locobot"))

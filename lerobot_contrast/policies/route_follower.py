@@ -1,4 +1,4 @@
-"""A scripted baseline for VLN (task: vln, on the LoCoBot): plan the shortest route on the map, follow it with VLN-CE discrete actions.
+"""A scripted baseline for VLN (task: vln, on vln_sim or the LoCoBot): plan the shortest route on the map, follow it with VLN-CE discrete actions.
 
 Limits, so its numbers are read for what they are:
 - it is privileged: it reads the subgoal objects from the instance's goal and the furniture from its scene,
@@ -18,6 +18,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from navigation_protocol import one_hot
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose
@@ -38,19 +39,12 @@ REACHED_MARGIN_M = 0.05
 CLEARANCE_M = 0.12
 WAYPOINT_REACHED_M = 0.15
 RANDOM_COMMANDS = ("forward", "turn_left", "turn_right")
-# VLN-CE's discrete actions, one float each as a LeRobot robot takes them (the largest positive one is executed).
-COMMANDS = ("forward", "turn_left", "turn_right", "stop")
 
 
 def build(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str]) -> RouteFollower:
     if not isinstance(task, VLNTask) or not hasattr(robot.config, "forward_m"):
-        raise PolicyError("--policy.type=route_follower navigates --task=vln on --robot.type=locobot only")
+        raise PolicyError("--policy.type=route_follower navigates --task=vln on --robot.type=vln_sim or locobot only")
     return RouteFollower(robot.config.forward_m, robot.config.turn_deg, args.language_blind)
-
-
-def one_hot(command: str) -> dict[str, float]:
-    """The discrete action that executes `command`."""
-    return {f"{c}.vel": float(c == command) for c in COMMANDS}
 
 
 def _wrap(angle: float) -> float:
@@ -58,7 +52,7 @@ def _wrap(angle: float) -> float:
 
 
 class RouteFollower:
-    """RobotPolicy for the LoCoBot's discrete action mode (see the module docstring for its limits)."""
+    """RobotPolicy for the discrete action mode of vln_sim and the LoCoBot (see the module docstring for its limits)."""
 
     name = "vln_route_follower"
 

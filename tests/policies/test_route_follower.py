@@ -7,7 +7,7 @@ from itertools import pairwise
 
 import numpy as np
 import pytest
-from lerobot_robot_locobot.actions import discrete_command
+from navigation_protocol import discrete_command
 
 from lerobot_contrast.contrast.scene import Pose
 from lerobot_contrast.contrast.task import perturb

@@ -9,14 +9,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from lerobot.robots import Robot
-from lerobot.utils.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.language_table import board
 from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
 from lerobot_contrast.domains.language_table.physics import TabletopPhysics
+from lerobot_contrast.domains.simulated_robot import SimulatedRobot
 
 CAMERA = "top"
 STATE = ("effector.x", "effector.y", "effector_target.x", "effector_target.y")
@@ -31,19 +30,15 @@ def episode_features(camera: bool = True) -> dict[str, dict[str, Any]]:
     return {"observation": observation, "action": dict.fromkeys(ACTION, float)}
 
 
-class LanguageTableSim(Robot):
+class LanguageTableSim(SimulatedRobot):
     config_class = LanguageTableSimConfig
     name = "language_table_sim"
-    simulated = True  # the evaluator may step it as fast as it computes
     stageable_objects = board.ALL_BLOCKS
     # Observation keys holding the effector's planar position in the scene frame.
     pose_keys = ("effector.x", "effector.y")
 
     def __init__(self, config: LanguageTableSimConfig) -> None:
         super().__init__(config)
-        self.config = config
-        self.cameras: dict[str, Any] = {}  # a rendered camera, not a LeRobot camera device
-        self._physics: TabletopPhysics | None = None
         self._renderer = None
 
     @property
@@ -54,31 +49,10 @@ class LanguageTableSim(Robot):
     def action_features(self) -> dict[str, type]:
         return episode_features()["action"]
 
-    @property
-    def is_connected(self) -> bool:
-        return self._physics is not None
-
-    @property
-    def is_calibrated(self) -> bool:
-        return True
-
-    def connect(self, calibrate: bool = True) -> None:
-        if self.is_connected:
-            raise DeviceAlreadyConnectedError(f"{self} is already connected")
-        self._physics = TabletopPhysics()
-        self._physics.set_state({}, (board.CENTER_X, board.CENTER_Y))
-        self.configure()
-
-    def calibrate(self) -> None:
-        pass
-
-    def configure(self) -> None:
-        pass
-
-    def _require(self) -> TabletopPhysics:
-        if self._physics is None:
-            raise DeviceNotConnectedError(f"{self} is not connected; call connect() first")
-        return self._physics
+    def _build(self) -> TabletopPhysics:
+        physics = TabletopPhysics()
+        physics.set_state({}, (board.CENTER_X, board.CENTER_Y))
+        return physics
 
     def get_observation(self) -> dict[str, Any]:
         physics = self._require()
@@ -101,11 +75,6 @@ class LanguageTableSim(Robot):
         delta = np.clip([float(action[key]) for key in ACTION], -board.MAX_ACTION, board.MAX_ACTION)
         physics.step(delta)
         return dict(zip(ACTION, delta.tolist(), strict=True))
-
-    def disconnect(self) -> None:
-        if not self.is_connected:
-            raise DeviceNotConnectedError(f"{self} is not connected")
-        self._physics = None
 
     def read_scene(self) -> Scene:
         blocks, (ex, ey) = self._require().state()

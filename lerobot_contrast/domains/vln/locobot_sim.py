@@ -1,30 +1,36 @@
-"""The LoCoBot host's `sim` backend: the simulated studio apartment, with a ray-cast RGB-D camera.
+"""The simulated studio apartment as a base with a ray-cast RGB-D camera: the LoCoBot host's `sim` backend, and
+the engine of the in-process `vln_sim` robot.
 
-The host finds it through the `lerobot_robot_locobot.backends` entry point, so the robot plugin imports nothing from
-this package; it implements the plugin's small `Backend` protocol (scenes cross it as JSON)."""
+The host finds it through the `lerobot_robot_locobot.backends` entry point, so neither package imports the other;
+it implements the plugin's small `Backend` protocol structurally (scenes cross it as JSON)."""
 
 from __future__ import annotations
 
 from collections.abc import Hashable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.vln.apartment import STUDIO, Apartment, CameraSpec, RayCaster
 
-if TYPE_CHECKING:
-    from lerobot_robot_locobot.config_host import SimConfig
-    from lerobot_robot_locobot.odometry import Pose2
-
 # Where the robot stands when the host starts, before a client stages a scene.
 START = Pose(4.0, 2.6, 0.0)
+
+
+class ApartmentSettings(Protocol):
+    """The host's `--sim.*` section, or the `vln_sim` robot's config."""
+
+    collision: str  # "slide" along an obstacle or "stop" where it touched
+    robot_radius: float
+    hfov_deg: float
+    camera_height_m: float
 
 
 class SimBackend:
     capabilities = frozenset({"scene_io", "set_odometry"})
 
-    def __init__(self, config: SimConfig) -> None:
+    def __init__(self, config: ApartmentSettings) -> None:
         self.config = config
         self.world = Apartment(robot_radius=config.robot_radius, collision=config.collision)
         self.world.set_scene({name: Pose(*pose) for name, pose in STUDIO.items()}, START)
@@ -69,7 +75,7 @@ class SimBackend:
     def moving(self) -> bool:
         return self.velocity != (0.0, 0.0)
 
-    def odometry(self) -> Pose2:
+    def odometry(self) -> tuple[float, float, float]:
         pose = self.world.pose
         return (pose.x, pose.y, pose.yaw)
 

@@ -2,7 +2,9 @@
 the robot (`python -m lerobot_robot_locobot.host`, ROS 2 or simulated backend) and its one wire protocol, and
 `--teleop.type=locobot_keyboard`. LeRobot imports this distribution at start-up (name prefix `lerobot_robot_`)."""
 
-from lerobot_robot_locobot.actions import COMMANDS, DISCRETE_KEYS, POSE_KEYS, VELOCITY_KEYS, is_stop, one_hot
+from navigation_protocol import COMMANDS, DISCRETE_KEYS, POSE_KEYS, is_stop, one_hot
+
+from lerobot_robot_locobot.actions import VELOCITY_KEYS
 from lerobot_robot_locobot.config_locobot import LocobotConfig
 from lerobot_robot_locobot.config_locobot_keyboard import LocobotKeyboardConfig
 from lerobot_robot_locobot.link import LocobotConnectionError, LocobotHostError

@@ -14,8 +14,9 @@ import uuid
 from typing import Any
 
 import zmq
+from navigation_protocol import COMMANDS
 
-from lerobot_robot_locobot.actions import COMMANDS, clamp
+from lerobot_robot_locobot.actions import clamp
 from lerobot_robot_locobot.backend import Backend, make_backend
 from lerobot_robot_locobot.config_host import HostConfig, HostConfigError, parse_config, validate
 from lerobot_robot_locobot.keys import KeyFileError, secure_server, start_authenticator

@@ -13,15 +13,14 @@ from typing import Any
 import numpy as np
 from lerobot.robots import Robot
 from lerobot.utils.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+from navigation_protocol import CAMERA, DEPTH, POSE_KEYS, STATE_KEYS, discrete_command, one_hot
 
-from lerobot_robot_locobot.actions import POSE_KEYS, STATE_KEYS, action_features, clamp, discrete_command, one_hot
+from lerobot_robot_locobot.actions import action_features, clamp
 from lerobot_robot_locobot.config_locobot import LocobotConfig
 from lerobot_robot_locobot.link import HostLink, Received
 from lerobot_robot_locobot.protocol import decode_depth, decode_rgb
 
 log = logging.getLogger(__name__)
-CAMERA = "front"
-DEPTH = "front_depth"
 
 
 class SceneIOUnavailable(RuntimeError):

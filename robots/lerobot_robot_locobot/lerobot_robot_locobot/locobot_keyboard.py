@@ -8,8 +8,9 @@ from typing import Any
 
 from lerobot.teleoperators.teleoperator import Teleoperator
 from lerobot.utils.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+from navigation_protocol import one_hot
 
-from lerobot_robot_locobot.actions import action_features, one_hot
+from lerobot_robot_locobot.actions import action_features
 from lerobot_robot_locobot.config_locobot_keyboard import LocobotKeyboardConfig
 
 KEY_COMMANDS = {"w": "forward", "a": "turn_left", "d": "turn_right", "s": "stop", " ": "stop"}
