@@ -50,7 +50,7 @@ class EvalConfig:
     # The policy under evaluation.
     policy: PolicyArgs = field(default_factory=PolicyArgs)
     # The robot: any LeRobot robot type, plugins included (e.g. so101_follower, lekiwi_client, locobot), or
-    # a simulator: language_table_sim (default for --task=language_table) or vln_sim (default for --task=vln).
+    # by default the task's simulator: language_table_sim (--task=language_table) or vln_sim (--task=vln).
     robot: RobotConfig | None = None
     # Control rate in Hz; default: 10 on hardware, as fast as possible on a simulated robot.
     fps: float | None = None
