@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -28,6 +29,7 @@ from lerobot_contrast.record.plan_file import write_plan
 from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import RunDir, open_run_dir
 from lerobot_contrast.record.summary import summarize
+from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.runner import RobotRunner
 
 if TYPE_CHECKING:
@@ -123,22 +125,24 @@ def run(evaluation: Evaluation) -> Results:
             spent = f"{state.cumulative_cost:.2f} {ev.cost_model.unit}"
             print(f"resuming {run_dir.path} at trial {state.next_index} ({spent} spent)")
     complete = False
-    try:
-        watching = ev.observers if ev.execute is None else ()  # observers watch the episodes a RobotRunner runs
-        for record in trials(ev, state, _executor(ev), watching):
-            if run_dir is None:
-                records.append(record)
-            else:
-                run_dir.journal.append(record)
-            if ev.verbose:
-                print(trial_line(record, ev.cost_model.unit), flush=True)
-        complete = True
-    finally:
-        summary = summarize(records, settings=ev.settings, complete=complete)
-        if run_dir is not None:
-            _write(run_dir, records, summary, ev.settings)
-        for observer in ev.observers:
-            observer.close()
+    quiet = nullcontext() if run_dir is None else third_party_output(run_dir.path)
+    with quiet:
+        try:
+            watching = ev.observers if ev.execute is None else ()  # observers watch the episodes a RobotRunner runs
+            for record in trials(ev, state, _executor(ev), watching):
+                if run_dir is None:
+                    records.append(record)
+                else:
+                    run_dir.journal.append(record)
+                if ev.verbose:
+                    print(trial_line(record, ev.cost_model.unit), flush=True)
+            complete = True
+        finally:
+            summary = summarize(records, settings=ev.settings, complete=complete)
+            if run_dir is not None:
+                _write(run_dir, records, summary, ev.settings)
+            for observer in ev.observers:
+                observer.close()
     return Results(records, summary, None if run_dir is None else run_dir.path)
 
 

@@ -6,6 +6,8 @@ once, so a run killed at any point keeps every episode it finished."""
 
 from __future__ import annotations
 
+import functools
+import importlib
 import json
 import os
 import re
@@ -14,6 +16,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+import datasets
 import numpy as np
 from lerobot.datasets import LeRobotDataset
 from lerobot.utils.feature_utils import build_dataset_frame, hw_to_dataset_features
@@ -35,6 +38,17 @@ EVAL_FEATURES = {
     "next.success": {"dtype": "bool", "shape": (1,), "names": None},
     "next.done": {"dtype": "bool", "shape": (1,), "names": None},
 }
+
+
+@functools.cache
+def video_backend() -> str:
+    """torchcodec where it loads (it needs FFmpeg's shared libraries), else PyAV: decided once per process, so
+    LeRobot does not retry torchcodec, and warn about it, on every episode."""
+    try:
+        importlib.import_module("torchcodec.decoders")
+    except (ImportError, OSError, RuntimeError):
+        return "pyav"
+    return "torchcodec"
 
 
 class DatasetError(UserError):
@@ -127,6 +141,8 @@ class DatasetRecorder:
         if self._frames == 0:  # an episode that ended before its first step has nothing to store
             return EpisodeFiles()
         episode = int(self.dataset.meta.total_episodes)
+        # Saving maps the episode's frames with a progress bar; LeRobot re-enables bars after each load, so again.
+        datasets.disable_progress_bars()
         self.dataset.save_episode()
         # LeRobot writes parquet footers only when finalizing; the next episode resumes into new files.
         self.dataset.finalize()
@@ -199,7 +215,9 @@ class DatasetRecorder:
                     f"{self.root} is damaged (the run stopped while saving an episode); move it aside to record "
                     "into a new dataset (the journal and the Rerun files are unaffected)"
                 )
-            dataset = LeRobotDataset.resume(self.repo_id, root=self.root, streaming_encoding=self.use_videos)
+            dataset = LeRobotDataset.resume(
+                self.repo_id, root=self.root, streaming_encoding=self.use_videos, video_backend=video_backend()
+            )
             _check_features(self.root, dataset.meta.features, features)
             return dataset
         if self.root.exists():  # created but no episode saved before the run stopped: start it afresh
@@ -212,6 +230,7 @@ class DatasetRecorder:
             robot_type=self.robot_type,
             use_videos=self.use_videos,
             streaming_encoding=self.use_videos,
+            video_backend=video_backend(),
         )
 
     def _append_sidecar(self, row: dict[str, Any]) -> None:
