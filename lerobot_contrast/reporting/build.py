@@ -46,7 +46,9 @@ def draw(runs: list[Run], groups: list[Group], versus, metric: str, output_dir: 
     shown = analysis.with_overall(contrast or per_perturbation, groups, metric)
     order = ["all", *analysis.perturbation_order(groups)]
     paths = [
-        figures.perturbation_figure(shown, order, metric, full, colors, output_dir / f"perturbations_{metric}.png")
+        figures.save(
+            figures.perturbation_plot(shown, order, metric, full, colors), output_dir / f"perturbations_{metric}.png"
+        )
     ]
     if versus:
         paths.append(figures.error_figure(versus, metric, unit, colors, output_dir / f"error_vs_cost_{metric}.png"))

@@ -19,7 +19,7 @@ def color_of(labels: list[str]) -> dict[str, str]:
     return {label: COLORS[k % len(COLORS)] for k, label in enumerate(labels)}
 
 
-def _save(fig: Figure, path: Path) -> Path:
+def save(fig: Figure, path: Path) -> Path:
     for ax in fig.axes:  # below the axes, where it hides no data
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     fig.savefig(path, dpi=150, bbox_inches="tight")
@@ -30,18 +30,6 @@ def _name(name: str) -> str:
     return {"original": "original", "all": "all trials"}.get(name) or perturbation_label(name)
 
 
-def perturbation_figure(
-    table: dict[str, dict[str, stats.Estimate]],
-    order: list[str],
-    metric: str,
-    full: float | None,
-    colors: dict[str, str],
-    path: Path,
-) -> Path:
-    """Mean metric per perturbation with 95% intervals, one bar per group (the paper's left panels)."""
-    return _save(perturbation_plot(table, order, metric, full, colors), path)
-
-
 def perturbation_plot(
     table: dict[str, dict[str, stats.Estimate]],
     order: list[str],
@@ -49,7 +37,9 @@ def perturbation_plot(
     full: float | None,
     colors: dict[str, str],
 ) -> Figure:
-    """Each bar carries its n; a perturbation a group has no trials of reads "n/a" (a bar of 0 would be a score)."""
+    """Mean metric per perturbation with 95% intervals, one bar per group (the paper's left panels).
+
+    Each bar carries its n; a perturbation a group has no trials of reads "n/a" (a bar of 0 would be a score)."""
     names = [n for n in order if any(n in per for per in table.values())]
     width = 0.8 / max(len(table), 1)
     fig = Figure(figsize=(max(6.0, 1.1 * len(names) + 3.0), 4.2))
@@ -98,7 +88,7 @@ def error_figure(
     ax.set_xlabel(f"cumulative cost ({unit} of staging)")
     ax.set_ylabel(f"|estimated − full i.i.d. {METRIC_NAMES[metric]}|")
     ax.set_title(f"Estimation error of {METRIC_NAMES[metric]} vs cost (mean ± std over seeds)")
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def _mark_standard_cost(ax, cost: float, unit: str) -> None:
@@ -136,4 +126,4 @@ def trials_figure(
     ax.set_xlabel(f"cumulative cost ({unit} of staging)")
     ax.set_ylabel("trials run")
     ax.set_title("Trials run vs cost (mean over seeds, band: fewest to most)")
-    return _save(fig, path)
+    return save(fig, path)
