@@ -48,7 +48,7 @@ def perturbation_plot(
         offset = (k - (len(table) - 1) / 2) * width
         shown = [(i + offset, per[n]) for i, n in enumerate(names) if n in per and per[n].n_trials > 0]
         for x in [i + offset for i, n in enumerate(names) if n not in per or per[n].n_trials == 0]:
-            ax.text(x, 0.01, "n/a", ha="center", va="bottom", fontsize=7, rotation=90, color=colors[label])
+            ax.text(x, 0.01, "n/a", ha="center", va="bottom", fontsize=7, color="dimgray")
         if not shown:
             ax.bar([], [], width, color=colors[label], label=label)  # the group keeps its legend entry
             continue
@@ -56,12 +56,12 @@ def perturbation_plot(
         means = np.array([e.mean for e in est])
         err = np.array([[e.mean - e.low for e in est], [e.high - e.mean for e in est]])
         ax.bar(xs, means, width, yerr=np.nan_to_num(err), capsize=3, color=colors[label], label=label)
-        for x, e in shown:
-            top = max(e.mean, e.high) if np.isfinite(e.high) else e.mean
-            ax.text(x, min(top, 0.97) + 0.01, f"n={e.n_trials}", ha="center", va="bottom", fontsize=6)
+        for x, e in shown:  # at the bar's foot, where no interval covers it and a bar of 0 still shows its n
+            ax.text(x, 0.01, f"n={e.n_trials}", ha="center", va="bottom", fontsize=7)
     if full is not None:
         ax.axhline(full, color="black", linestyle="--", linewidth=1, label=f"full i.i.d. evaluation ({full:.3f})")
     ax.set_xticks(range(len(names)), [_name(n) for n in names])
+    ax.set_xlim(-0.6, len(names) - 0.4)
     ax.set_xlabel("trials (original = the i.i.d. base instances; all trials = the strategy's estimate)")
     ax.set_ylabel(f"mean {METRIC_NAMES[metric]} (95% interval)")
     ax.set_ylim(0.0, 1.05)
