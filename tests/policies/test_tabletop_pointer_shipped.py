@@ -15,8 +15,8 @@ from lerobot_contrast.domains.language_table.task import LanguageTableTask
 from lerobot_contrast.training.episodes import Simulator
 from lerobot_contrast.training.learner import Learner, closed_loop
 
-# Success of the shipped weights on these 30 instances when they were shipped, less a margin for platform noise.
-SUCCESS_FLOOR = 0.4
+# The shipped weights scored 0.70 on these 30 instances; the floor leaves room for platform differences in float math.
+SUCCESS_FLOOR = 0.5
 
 
 def test_shipped_files_are_small_and_complete():
