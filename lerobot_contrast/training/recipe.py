@@ -35,13 +35,13 @@ class Recipe:
     demos: int = 1500
     demo_noise: float = 0.01
     # Gradient steps of each training run: the first from scratch, then one after each DAgger round.
-    steps: list[int] = field(default_factory=lambda: [5000, 1500, 1500, 1500, 2000, 2000])
+    steps: list[int] = field(default_factory=lambda: [5000, 1500, 1500, 1500, 2000, 3000, 2000])
     batch_size: int = 32
     num_workers: int = 1
     # Torch threads of each training run: on a shared 2-core CPU one thread per process beats contending ones.
     train_threads: int = 1
     # DAgger: learner roll-outs per round, and the oracle's share of executed actions in each round.
-    betas: list[float] = field(default_factory=lambda: [0.5, 0.2, 0.0, 0.0, 0.0])
+    betas: list[float] = field(default_factory=lambda: [0.5, 0.2, 0.0, 0.0, 0.0, 0.0])
     dagger_episodes: int = 250
     max_steps: int = 120
     # Closed-loop check after training: fresh instances from a seed never used for data.
