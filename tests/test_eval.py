@@ -13,9 +13,9 @@ import pytest
 
 from lerobot_contrast.eval import main
 
-SMALL = ["--n_instances=3", "--seed=5", "--policy.noise_std=0.005"]
+SMALL = ["--n_instances=3", "--seed=5", "--policy.type=oracle", "--policy.noise_std=0.005"]
 # Long enough (about 50 trials) that a signal sent after the fourth trial lands mid-run.
-LONGER = ["--n_instances=8", "--seed=5", "--policy.noise_std=0.005"]
+LONGER = ["--n_instances=8", "--seed=5", "--policy.type=oracle", "--policy.noise_std=0.005"]
 TIMING = ("duration_s", "started_at")
 
 

@@ -11,7 +11,7 @@ from lerobot_contrast.eval import main as eval_main
 from lerobot_contrast.report import main
 from lerobot_contrast.reporting import load_run
 
-PLAN = ["--n_instances=4", "--max_episode_steps=80", "--policy.noise_std=0.01"]
+PLAN = ["--n_instances=4", "--max_episode_steps=80", "--policy.type=oracle", "--policy.noise_std=0.01"]
 RUNS = {
     "standard-0": ["--strategy=standard", "--seed=0"],
     "standard-1": ["--strategy=standard", "--seed=1"],
