@@ -12,7 +12,7 @@ from pathlib import Path
 import draccus
 from lerobot_policy_tabletop_pointer import WEIGHTS
 
-from lerobot_contrast.training.recipe import Recipe, run, ship
+from lerobot_contrast.training.recipe import Recipe, RecipeError, run, ship
 
 
 @dataclass
@@ -37,4 +37,8 @@ if __name__ == "__main__":
         cause = error.__cause__ if isinstance(error.__cause__, ValueError) else error
         print(f"error: {cause}", file=sys.stderr)
         sys.exit(2)
-    main(parsed)
+    try:
+        main(parsed)
+    except RecipeError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(1)

@@ -21,6 +21,7 @@ import numpy as np
 
 from lerobot_contrast.domains.language_table import board
 from lerobot_contrast.domains.language_table.task import LanguageTableTask
+from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.training.episodes import NoisyOracle, Simulator, open_dataset, record_episodes
 from lerobot_contrast.training.learner import Learner, Mixture, closed_loop
 
@@ -66,6 +67,10 @@ class Recipe:
 
     def final_model(self) -> Path:
         return self.train_dir(len(self.betas)) / "checkpoints" / "last" / "pretrained_model"
+
+
+class RecipeError(RuntimeError):
+    """A phase that failed; the message names it and where its output is."""
 
 
 class Progress:
@@ -138,8 +143,11 @@ def _train(recipe: Recipe, round_index: int) -> None:
         ]
     command = [str(Path(sys.executable).parent / "lerobot-train"), *args]
     env = {**os.environ, "HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": str(recipe.train_threads)}
-    with open(recipe.output_dir / f"train_{round_index}.log", "a") as log:
-        subprocess.run(command, check=True, stdout=log, stderr=subprocess.STDOUT, env=env)
+    log_path = recipe.output_dir / f"train_{round_index}.log"
+    with open(log_path, "a") as log:
+        status = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT, env=env).returncode
+    if status != 0:
+        raise RecipeError(f"lerobot-train exited with {status} in round {round_index}; its output is in {log_path}")
 
 
 def run(recipe: Recipe) -> dict[str, float]:
@@ -150,6 +158,11 @@ def run(recipe: Recipe) -> dict[str, float]:
     torch.set_num_threads(1)
     recipe.output_dir.mkdir(parents=True, exist_ok=True)
     (recipe.output_dir / "recipe.json").write_text(json.dumps(asdict(recipe), indent=1, default=str))
+    with third_party_output(recipe.output_dir):  # LeRobot's warnings once, in one line; in full in the log
+        return _phases(recipe)
+
+
+def _phases(recipe: Recipe) -> dict[str, float]:
     progress = Progress(recipe.output_dir / "progress.json")
     task = LanguageTableTask()
     if not progress.done("demos"):

@@ -73,3 +73,17 @@ def test_a_steps_list_that_does_not_match_the_rounds_is_refused_in_one_line():
         "error: --recipe.steps has 2 entries for 2 DAgger rounds; give one more than --recipe.betas "
         "(the first training run, then one per round)"
     ]
+
+
+def test_a_failed_training_run_is_named_in_one_line_with_its_log(tmp_path):
+    script = Path(__file__).parents[2] / "scripts" / "train_default_policy.py"
+    args = ["--recipe.demos=2", "--recipe.steps=[2]", "--recipe.betas=[]", "--recipe.batch_size=0"]
+    result = subprocess.run(
+        [sys.executable, str(script), f"--recipe.output_dir={tmp_path}", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    last = result.stderr.strip().splitlines()[-1]
+    assert last == f"error: lerobot-train exited with 1 in round 0; its output is in {tmp_path / 'train_0.log'}"
