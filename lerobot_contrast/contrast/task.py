@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Literal
 
@@ -28,7 +29,21 @@ class Judgement:
     progress: float | None = None
 
 
-class Task:
+def named_goal_position(instance: Instance) -> tuple[float, float] | None:
+    """A goal's `target_xy`, else the pose of the object its `target_block`, `target` or `goal_object` names; None
+    when the goal names no place."""
+    goal = instance.goal
+    if "target_xy" in goal:
+        x, y = goal["target_xy"][:2]
+        return float(x), float(y)
+    for key in ("target_block", "target", "goal_object"):
+        pose = instance.scene.objects.get(goal.get(key)) if isinstance(goal.get(key), str) else None
+        if pose is not None:
+            return pose.x, pose.y
+    return None
+
+
+class Task(ABC):
     """A task domain: samples i.i.d. instances, grounds them in scenes, and judges outcomes.
 
     A subclass sets `name` and `perturbations` and implements the four abstract methods; every other member
@@ -43,25 +58,25 @@ class Task:
     # Base instances an evaluation samples when --n_instances is not given.
     default_instances: int = 50
 
+    @abstractmethod
     def sample(self, n: int, rng: np.random.Generator) -> list[Instance]:
         """`n` i.i.d. evaluation instances, each with a valid, not yet achieved goal."""
-        raise NotImplementedError
 
+    @abstractmethod
     def storage_scene(self) -> Scene:
         """Where the objects are before the session's first trial, so that trial pays for a full set-up."""
-        raise NotImplementedError
 
+    @abstractmethod
     def rebase(self, instance: Instance, scene: Scene) -> Instance | None:
         """The same instruction set in `scene`, with scene-derived goal fields recomputed.
 
         None when the instruction cannot be grounded there (an object missing, a target off
         the workspace). Achievement is checked separately with `is_achieved`.
         """
-        raise NotImplementedError
 
+    @abstractmethod
     def is_achieved(self, instance: Instance, scene: Scene) -> bool:
         """Whether `scene` satisfies the instance's goal, given that it started in `instance.scene`."""
-        raise NotImplementedError
 
     def subgoals(self, instance: Instance) -> list[str]:
         """The instance's ordered subgoals, as the operator is asked about them (default: none)."""
@@ -82,17 +97,8 @@ class Task:
     def goal_position(self, instance: Instance) -> tuple[float, float] | None:
         """Where the instruction wants the robot or an object to end up, for drawing the goal on a map.
 
-        Default: a goal's `target_xy`, else the pose of the object its `target_block`, `target` or
-        `goal_object` names; None when the goal names no place."""
-        goal = instance.goal
-        if "target_xy" in goal:
-            x, y = goal["target_xy"][:2]
-            return float(x), float(y)
-        for key in ("target_block", "target", "goal_object"):
-            pose = instance.scene.objects.get(goal.get(key)) if isinstance(goal.get(key), str) else None
-            if pose is not None:
-                return pose.x, pose.y
-        return None
+        Default: `named_goal_position`."""
+        return named_goal_position(instance)
 
     def cost_model(self, name: str) -> CostModel:
         """The `--cost` model by name (default: the core's distance or reset-time model)."""

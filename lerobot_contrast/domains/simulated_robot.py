@@ -3,6 +3,7 @@ its world and disconnecting drops it."""
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from typing import Any
 
 from lerobot.robots import Robot
@@ -18,9 +19,9 @@ class SimulatedRobot(Robot):
         self.cameras: dict[str, Any] = {}  # rendered cameras, not LeRobot camera devices
         self._world: Any = None
 
+    @abstractmethod
     def _build(self) -> Any:
         """A fresh world (physics, apartment), as the robot finds it when it connects."""
-        raise NotImplementedError
 
     @property
     def is_connected(self) -> bool:

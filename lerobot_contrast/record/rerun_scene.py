@@ -13,10 +13,11 @@ import numpy as np
 import rerun as rr
 
 from lerobot_contrast.contrast.cost import moved_objects
+from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import staging_moves
-from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.contrast.task import Task, named_goal_position
 from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
 
 AXIS_MEANING = {
@@ -76,7 +77,7 @@ class MapBounds:
     ) -> MapBounds:
         scenes = (context.instance.scene, context.base.scene, after)
         points = [(p.x, p.y) for scene in scenes for p in scene.objects.values()] + list(poses)
-        goal = (task or Task()).goal_position(context.instance)
+        goal = _goal_position(task, context.instance)
         points += [goal] if goal is not None else []
         if not points:
             return cls((-1.0, 1.0), (-1.0, 1.0))
@@ -120,7 +121,7 @@ def log_map(
 
 def _log_goal(recording: rr.RecordingStream, context: TrialContext, task: Task | None, radius: float) -> None:
     """The goal region, and an arrow to it from the object the instruction moves."""
-    goal = (task or Task()).goal_position(context.instance)
+    goal = _goal_position(task, context.instance)
     if goal is None:
         return
     gold = (255, 215, 0)
@@ -231,3 +232,7 @@ def outcome_markdown(record: TrialRecord, unit: str) -> str:
         ("duration", f"{record.duration_s:.1f} s"),
     ]
     return "\n".join([f"### Outcome: {verdict}", "", "| | |", "|---|---|", *(f"| {k} | {v} |" for k, v in rows)])
+
+
+def _goal_position(task: Task | None, instance: Instance) -> tuple[float, float] | None:
+    return named_goal_position(instance) if task is None else task.goal_position(instance)

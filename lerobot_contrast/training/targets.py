@@ -15,7 +15,7 @@ from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.domains.language_table import board
 from lerobot_contrast.domains.language_table import families as fam
-from lerobot_contrast.domains.language_table.oracle import PRE_PUSH_BACKOFFS
+from lerobot_contrast.domains.language_table.oracle import reachable
 
 OBJECTS = board.ALL_BLOCKS
 PREFIX = "observation.privileged."
@@ -46,10 +46,7 @@ def _one_hot(names: list[str], size: int = K) -> np.ndarray:
 
 def oracle_goal(instance: Instance, scene: Scene) -> np.ndarray:
     """Where the push oracle takes the block: the family's push target, kept where the effector fits behind it."""
-    _, goal = fam.push_target(instance, scene)
-    inset = PRE_PUSH_BACKOFFS[0]
-    (x_min, y_min), (x_max, y_max) = board.WORKSPACE_BOUNDS
-    return np.clip(goal, (x_min + inset, y_min + inset), (x_max - inset, y_max - inset))
+    return reachable(fam.push_target(instance, scene)[1])
 
 
 def _goal_structure(instance: Instance, goal_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:

@@ -114,5 +114,5 @@ def test_the_goal_structure_expresses_every_family_exactly(family):
             "away": torch.from_numpy(truth[PRIVILEGED_PREFIX + "away"]),
             "group": torch.tensor([big if truth[PRIVILEGED_PREFIX + "group"][0] else -big]),
         }
-        _, goal = policy.compose(seen)
+        goal = policy.compose(seen).goal
         np.testing.assert_allclose(goal[0].numpy(), truth[PRIVILEGED_PREFIX + "goal_xy"], atol=2e-3)

@@ -132,6 +132,14 @@ def along(path: np.ndarray, distance: float) -> np.ndarray:
     return path[-1]
 
 
+def reachable(goal: np.ndarray) -> np.ndarray:
+    """Where the oracle pushes towards `goal`: goals off the reachable board (absolute corners) move in, so the
+    effector still fits behind the block."""
+    (x_min, y_min), (x_max, y_max) = WORKSPACE_BOUNDS
+    inset = PRE_PUSH_BACKOFFS[0]
+    return np.clip(goal, (x_min + inset, y_min + inset), (x_max - inset, y_max - inset))
+
+
 def _blocks_xy(scene: Scene) -> dict[str, np.ndarray]:
     return {name: np.array((p.x, p.y)) for name, p in scene.objects.items()}
 
@@ -169,10 +177,7 @@ class PushOracle:
 
     def _plan(self, scene: Scene, effector_target_xy) -> np.ndarray:
         name, goal = self.task.push_target(self.instance, scene)
-        # Goals off the reachable board (absolute corners) move in: the effector must fit behind the block.
-        (x_min, y_min), (x_max, y_max) = WORKSPACE_BOUNDS
-        inset = PRE_PUSH_BACKOFFS[0]
-        goal = np.clip(goal, (x_min + inset, y_min + inset), (x_max - inset, y_max - inset))
+        goal = reachable(goal)
         blocks = _blocks_xy(scene)
         block = blocks.pop(name)
         if math.dist(block, goal) < GOAL_TOLERANCE:

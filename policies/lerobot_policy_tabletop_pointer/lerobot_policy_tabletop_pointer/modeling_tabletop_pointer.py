@@ -7,7 +7,7 @@ action. At evaluation the policy sees only the camera image, the effector state 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import torch
 from lerobot.policies import PreTrainedPolicy
@@ -43,6 +43,14 @@ def nearest_blocks(positions: Tensor, present: Tensor, source: Tensor, effector:
     distance = (positions - effector.unsqueeze(1)).norm(dim=-1) + (1 - present) * 10 + source * 10
     index = distance.topk(n, largest=False).indices
     return positions.gather(1, index.unsqueeze(-1).expand(-1, -1, 2))
+
+
+class Pointed(NamedTuple):
+    """What the instruction points at: weights over the objects for the pushed one, its position, and the goal."""
+
+    weights: Tensor
+    source: Tensor
+    goal: Tensor
 
 
 def _privileged(batch: dict[str, Any], name: str) -> Tensor:
@@ -96,8 +104,8 @@ class TabletopPointerPolicy(PreTrainedPolicy):
             self._read = (tuple(tasks), self.instruction(self.tokenizer(list(tasks), device)))
         return self._read[1]
 
-    def compose(self, seen: dict[str, Tensor]) -> tuple[Tensor, Tensor]:
-        """The pushed object's position and the goal (B, 2), from what `perceive` found."""
+    def compose(self, seen: dict[str, Tensor]) -> Pointed:
+        """The pushed object (its weights over the objects, its position) and the goal, from what `perceive` found."""
         present = torch.sigmoid(seen["presence"])
         positions = seen["positions"]
         source_weights = (seen["source"] + torch.log(present + 1e-6)).softmax(-1)
@@ -112,19 +120,18 @@ class TabletopPointerPolicy(PreTrainedPolicy):
         anchor = (weights.unsqueeze(-1) * anchors).sum(1)
         away = source - anchor
         away = away / away.norm(dim=-1, keepdim=True).clamp(min=1e-6)
-        return source, anchor + seen["offset"] + seen["away"].unsqueeze(-1) * away
+        return Pointed(source_weights, source, anchor + seen["offset"] + seen["away"].unsqueeze(-1) * away)
 
     @torch.no_grad()
     def select_action(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
         seen = self.perceive(batch)
-        source, goal = self.compose(seen)
-        if self._goal is None or self._goal.shape != goal.shape:
-            self._goal = goal
+        pointed = self.compose(seen)
+        if self._goal is None or self._goal.shape != pointed.goal.shape:
+            self._goal = pointed.goal
         effector = batch[STATE_KEY][:, 2:4].float()
-        source_weights = (seen["source"] + torch.log(torch.sigmoid(seen["presence"]) + 1e-6)).softmax(-1)
         present = (seen["presence"] > 0).float()
-        obstacles = nearest_blocks(seen["positions"], present, source_weights, effector, self.config.obstacles)
-        action = self.steering.action(*self.steering(effector, source, self._goal, obstacles))
+        obstacles = nearest_blocks(seen["positions"], present, pointed.weights, effector, self.config.obstacles)
+        action = self.steering.action(*self.steering(effector, pointed.source, self._goal, obstacles))
         return (action * self.config.max_action).clamp(-self.config.max_action, self.config.max_action)
 
     def predict_action_chunk(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
@@ -132,11 +139,11 @@ class TabletopPointerPolicy(PreTrainedPolicy):
 
     def forward(self, batch: dict[str, Any]) -> tuple[Tensor, dict]:
         seen = self.perceive(batch)
-        losses = {**self._perception_losses(batch, seen), **self._instruction_losses(batch, seen)}
-        losses["action"] = self._action_loss(batch, seen)
         with torch.no_grad():
-            _, goal = self.compose(seen)
-            goal_error = (goal - _privileged(batch, "goal_xy")).norm(dim=-1).mean()
+            pointed = self.compose(seen)
+        goal_error = (pointed.goal - _privileged(batch, "goal_xy")).norm(dim=-1).mean()
+        losses = {**self._perception_losses(batch, seen), **self._instruction_losses(batch, seen)}
+        losses["action"] = self._action_loss(batch, pointed.source)
         loss = sum(losses.values())
         return loss, {**{k: v.item() for k, v in losses.items()}, "goal_error_m": goal_error.item()}
 
@@ -167,13 +174,12 @@ class TabletopPointerPolicy(PreTrainedPolicy):
             "offset": offset.mean() + away.mean(),
         }
 
-    def _action_loss(self, batch: dict[str, Any], seen: dict[str, Tensor]) -> Tensor:
+    def _action_loss(self, batch: dict[str, Any], source_seen: Tensor) -> Tensor:
         """The steering head learns from true positions (with noise) and, at `predicted_input_rate`, the predicted
         pushed-object position, so it neither depends on perfect perception nor learns from early garbage alone."""
-        b, k = seen["source"].shape
-        truth = _privileged(batch, "objects_xy").view(b, k, 2)
+        b = source_seen.shape[0]
+        truth = _privileged(batch, "objects_xy").view(b, -1, 2)
         source_true = (_privileged(batch, "source").unsqueeze(-1) * truth).sum(1)
-        source_seen, _ = self.compose({key: v.detach() for key, v in seen.items()})
         use_seen = torch.rand(b, 1, device=truth.device) < self.config.predicted_input_rate
         noise = self.config.position_noise
         source = torch.where(use_seen, source_seen, source_true + noise * torch.randn_like(source_true))
