@@ -27,8 +27,8 @@ from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.evaluation import Evaluation, check_budget, preview, run
 from lerobot_contrast.flags import help_text, join_values, parse_config, robot_type, wants_help
-from lerobot_contrast.operator_console import SessionStopped
-from lerobot_contrast.policies import make_policy
+from lerobot_contrast.operator_console import OperatorConsole, SessionStopped
+from lerobot_contrast.policies import Policy, make_policy
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
 from lerobot_contrast.record.summary import format_summary
@@ -101,8 +101,8 @@ def connect(robot: Robot) -> None:
         ) from None
 
 
-def plan_and_run(cfg: EvalConfig) -> int:
-    """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code."""
+def planned_evaluation(cfg: EvalConfig) -> Evaluation:
+    """The checked plan as an Evaluation with no robot, policy or run directory attached yet."""
     source = adopt_plan(cfg) if cfg.plan else None
     validate(cfg)
     task, plan = build_plan(cfg)
@@ -110,6 +110,34 @@ def plan_and_run(cfg: EvalConfig) -> int:
         check_same_plan(source, plan)
     planned = Evaluation(task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed)
     check_budget(planned)
+    return planned
+
+
+def equipped(
+    cfg: EvalConfig, planned: Evaluation, robot: Robot, policy: Policy, operator: OperatorConsole | None
+) -> Evaluation:
+    """The planned evaluation with its connected robot, policy, operator and observers, recorded in cfg.output_dir."""
+    return dataclasses.replace(
+        planned,
+        policy=policy,
+        robot=robot,
+        observers=make_observers(cfg, planned.task, robot, cfg.output_dir),
+        operator=operator,
+        fps=run_fps(cfg, robot),
+        max_steps=cfg.max_episode_steps,
+        max_episode_s=cfg.max_episode_s,
+        output_dir=cfg.output_dir,
+        resume=cfg.resume,
+        config=config_json(cfg),
+        labels={"strategy": cfg.strategy, "policy": cfg.policy.label},
+        verbose=True,
+    )
+
+
+def plan_and_run(cfg: EvalConfig) -> int:
+    """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code."""
+    planned = planned_evaluation(cfg)
+    task = planned.task
     if cfg.dry_run:
         dry_run(planned)
         return 0
@@ -121,22 +149,7 @@ def plan_and_run(cfg: EvalConfig) -> int:
         operator = make_operator(cfg, robot, task, planned.cost_model.unit)
         policy = make_policy(cfg.policy, robot, task, cfg.rename_map)  # one that cannot load leaves no run directory
         cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
-        evaluation = dataclasses.replace(
-            planned,
-            policy=policy,
-            robot=robot,
-            observers=make_observers(cfg, task, robot, cfg.output_dir),
-            operator=operator,
-            fps=run_fps(cfg, robot),
-            max_steps=cfg.max_episode_steps,
-            max_episode_s=cfg.max_episode_s,
-            output_dir=cfg.output_dir,
-            resume=cfg.resume,
-            config=config_json(cfg),
-            labels={"strategy": cfg.strategy, "policy": cfg.policy.label},
-            verbose=True,
-        )
-        return run_and_report(cfg, evaluation)
+        return run_and_report(cfg, equipped(cfg, planned, robot, policy, operator))
     finally:
         if robot.is_connected:
             robot.disconnect()
