@@ -1,0 +1,162 @@
+"""`python -m lerobot_contrast.sweep SWEEP.yaml`: many evaluations (a grid or list of eval settings) run as Ray
+tasks, on this machine or a cluster, each into its own run directory under one sweep folder."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+
+from lerobot_contrast.config import ConfigError
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.eval import planned_evaluation
+from lerobot_contrast.flags import _flag_lines, join_values, parse_config, wants_help
+from lerobot_contrast.record.journal import read_journal
+from lerobot_contrast.record.sweep_dir import is_complete, is_sweep_dir, write_index, write_sweep_results
+from lerobot_contrast.sweep_cell import CellOutcome
+from lerobot_contrast.sweep_file import Cell, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep_ray import RayArgs, run_cells, start_ray
+
+COMMAND = "python -m lerobot_contrast.sweep SWEEP.yaml"
+
+
+@dataclass
+class SweepConfig:
+    """Run a sweep of contrast-set evaluations on Ray: every cell a simulated evaluation in its own run directory."""
+
+    # The sweep file (YAML, also given as the first argument): `eval` (settings every cell shares), `grid` (lists
+    # of values; every combination is a cell), `cells` (a list of settings to override, each with an optional
+    # `name` standing for them in the cell's directory name), and optionally `output_dir`.
+    sweep: Path | None = None
+    # The sweep folder, which holds one run directory per cell (default: the sweep file's output_dir, else
+    # outputs/sweeps/<sweep file name>). On a cluster it must be storage every node mounts at the same path.
+    output_dir: Path | None = None
+    # Continue the sweep in the sweep folder: skip complete cells and resume the others from their journals.
+    resume: bool = False
+    # Times Ray reruns a cell whose worker process dies; each attempt resumes from the cell's journal.
+    max_retries: int = 3
+    # List the cells and their planned trials, then exit without running anything.
+    dry_run: bool = False
+    ray: RayArgs = field(default_factory=RayArgs)
+
+
+def sweep_args(argv: list[str]) -> list[str]:
+    """The sweep file as the first argument, or as --sweep=PATH."""
+    if argv and not argv[0].startswith("-"):
+        return [f"--sweep={argv[0]}", *argv[1:]]
+    return argv
+
+
+def sweep_folder(cfg: SweepConfig, spec: dict) -> Path:
+    given = cfg.output_dir or spec.get("output_dir")
+    folder = Path(given) if given else Path("outputs/sweeps") / cfg.sweep.stem
+    if folder.exists() and any(folder.iterdir()) and not cfg.resume and not cfg.dry_run:
+        what = "a sweep folder" if is_sweep_dir(folder) else "not empty"
+        raise ConfigError(f"--output_dir: {folder} is {what}; pass --resume=true to continue it or choose another")
+    return folder
+
+
+def plan_cells(cells: list[Cell]) -> dict[str, int]:
+    """Each cell's planned trials; planning every cell first reports a bad setting before anything runs."""
+    planned = {}
+    for cell in cells:
+        try:
+            planned[cell.name] = len(planned_evaluation(cell.config).plan)
+        except UserError as error:
+            raise ConfigError(f"cell {cell.name}: {error}") from None
+    return planned
+
+
+def outcome_line(outcome: CellOutcome) -> str:
+    if outcome.status == "complete":
+        return f"{outcome.name}: complete, {outcome.trials} trials in {outcome.seconds:.0f} s"
+    return f"{outcome.name}: failed: {outcome.error}"
+
+
+def index_entries(cells: list[Cell], outcomes: dict[str, CellOutcome]) -> list[dict]:
+    entries = []
+    for cell in cells:
+        outcome = outcomes.get(cell.name)
+        entry = {"name": cell.name, "settings": cell.settings, "status": "pending"}
+        if outcome is not None:
+            entry |= {"status": outcome.status, "trials": outcome.trials, "seconds": round(outcome.seconds, 1)}
+            entry |= {"cpu_s": round(outcome.cpu_s, 1), "node": outcome.node, "error": outcome.error}
+        entries.append(entry)
+    return entries
+
+
+def run_sweep(cfg: SweepConfig, console: Console) -> int:
+    """Run the sweep file cfg.sweep names; the exit code is 1 when any cell failed."""
+    if cfg.sweep is None:
+        raise ConfigError(f"give the sweep file: {COMMAND}")
+    outcomes = execute(cfg, read_sweep_file(cfg.sweep), console)
+    return int(any(outcome.status != "complete" for outcome in outcomes.values()))
+
+
+def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[str, CellOutcome]:
+    """Run the cells of `spec` (a sweep file's contents, read from cfg.sweep) that are not complete yet, then
+    write the sweep index and results table; every cell's outcome by name (none with --dry_run)."""
+    folder = sweep_folder(cfg, spec)
+    cells = sweep_cells(cfg.sweep, spec, folder)
+    planned = plan_cells(cells)
+    if cfg.dry_run:
+        for cell in cells:
+            console.print(f"{cell.name}: {planned[cell.name]} planned trials", highlight=False)
+        console.print(f"{len(cells)} cells into {folder}", highlight=False)
+        return {}
+    outcomes = {c.name: _finished(c) for c in cells if is_complete(Path(c.config.output_dir))}
+    folder.mkdir(parents=True, exist_ok=True)
+    write_index(folder, index_entries(cells, outcomes))
+    if outcomes:
+        console.print(f"{len(outcomes)} of {len(cells)} cells already complete", highlight=False)
+    todo = [cell for cell in cells if cell.name not in outcomes]
+    if todo:
+        start_ray(cfg.ray)
+        ran = run_cells(todo, planned, cfg.max_retries, lambda o: _report(console, folder, o), console)
+        outcomes |= {outcome.name: outcome for outcome in ran}
+    entries = index_entries(cells, outcomes)
+    write_index(folder, entries)
+    table = write_sweep_results(folder, entries)
+    failed = sum(outcome.status != "complete" for outcome in outcomes.values())
+    console.print(
+        f"sweep: {len(cells) - failed} of {len(cells)} cells complete, {failed} failed; results: {table}",
+        highlight=False,
+        soft_wrap=True,
+    )
+    return outcomes
+
+
+def _finished(cell: Cell) -> CellOutcome:
+    return CellOutcome(cell.name, "complete", len(read_journal(Path(cell.config.output_dir) / "journal.jsonl")))
+
+
+def _report(console: Console, folder: Path, outcome: CellOutcome) -> None:
+    """One line per cell as it ends; an unexpected error's traceback goes to logs/<cell>.log."""
+    line = outcome_line(outcome)
+    if outcome.detail is not None:
+        log = folder / "logs" / f"{outcome.name}.log"
+        log.parent.mkdir(exist_ok=True)
+        log.write_text(outcome.detail, encoding="utf-8")
+        line += f" (traceback in {log})"
+    console.print(line, highlight=False, soft_wrap=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    console = Console()
+    try:
+        argv = sweep_args(join_values(list(sys.argv[1:] if argv is None else argv)))
+        if wants_help(argv):
+            lines = [f"usage: {COMMAND} [--flag=value | --flag value] ...", "", SweepConfig.__doc__ or "", ""]
+            print("\n".join(lines + _flag_lines(SweepConfig, "")))
+            return 0
+        return run_sweep(parse_config(SweepConfig, argv), console)
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,102 @@
+"""One sweep cell, as a Ray worker runs it: its EvalConfig as an Evaluation run by the spine, resumed from its
+journal wherever an earlier attempt left one. A learned policy loads once per worker process, not per cell."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from lerobot_contrast.build import make_robot
+from lerobot_contrast.config import EvalConfig, config_json
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.eval import connect, equipped, planned_evaluation
+from lerobot_contrast.evaluation import run
+from lerobot_contrast.policies import PRETRAINED_BUILD, Policy, make_policy, policy_entry
+from lerobot_contrast.policies.base import PolicyArgs
+from lerobot_contrast.record.journal import read_journal
+from lerobot_contrast.record.sweep_dir import is_complete
+
+if TYPE_CHECKING:
+    from lerobot.robots import Robot
+
+# Learned policies loaded in this process, by their settings and the robot features they were built for.
+# Scripted policies are not kept: they are cheap to build and hold on to their cell's robot.
+_LOADED: dict[str, Policy] = {}
+
+
+@dataclass(frozen=True)
+class CellOutcome:
+    name: str
+    status: str  # complete or failed
+    trials: int = 0
+    seconds: float = 0.0
+    cpu_s: float = 0.0  # CPU time of the worker process while it ran the cell
+    node: str | None = None  # the Ray node that ran it
+    error: str | None = None  # one line
+    detail: str | None = None  # the traceback of an unexpected error
+
+
+def wants_gpu(policy: PolicyArgs) -> bool:
+    return str(policy.device or "").startswith("cuda")
+
+
+def run_cell(name: str, cfg: EvalConfig) -> CellOutcome:
+    """Run (or resume, or find finished) the cell's evaluation in `cfg.output_dir`; never raises for the cell's
+    own errors, so one bad cell does not stop the sweep."""
+    start, cpu_start = time.perf_counter(), time.process_time()
+
+    def outcome(status: str, trials: int = 0, error: str | None = None, detail: str | None = None) -> CellOutcome:
+        seconds, cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
+        return CellOutcome(name, status, trials, seconds, cpu_s, _node(), error, detail)
+
+    try:
+        trials = _run(dataclasses.replace(cfg))
+    except UserError as error:
+        return outcome("failed", error=str(error))
+    except Exception as error:
+        return outcome(
+            "failed", error=f"{type(error).__name__}: {' '.join(str(error).split())}", detail=traceback.format_exc()
+        )
+    return outcome("complete", trials)
+
+
+def _run(cfg: EvalConfig) -> int:
+    run_dir = Path(cfg.output_dir)
+    cfg.resume = (run_dir / "config.json").is_file()  # an earlier attempt, killed or interrupted, started it
+    if cfg.resume and is_complete(run_dir):
+        return len(read_journal(run_dir / "journal.jsonl"))
+    planned = planned_evaluation(cfg)
+    robot = make_robot(cfg)
+    connect(robot)
+    try:
+        policy = _policy(cfg, robot, planned.task)
+        evaluation = dataclasses.replace(equipped(cfg, planned, robot, policy, None), verbose=False)
+        return len(run(evaluation).records)
+    finally:
+        if robot.is_connected:
+            robot.disconnect()
+
+
+def _policy(cfg: EvalConfig, robot: Robot, task: Task) -> Policy:
+    if policy_entry(cfg.policy).build != PRETRAINED_BUILD:
+        return make_policy(cfg.policy, robot, task, cfg.rename_map)
+    import torch
+
+    torch.set_num_threads(1)  # the cells are the parallelism: one thread each
+    encoded = config_json(cfg)
+    key = json.dumps([encoded["policy"], encoded["rename_map"], encoded["robot"]], sort_keys=True, default=str)
+    if key not in _LOADED:
+        _LOADED[key] = make_policy(cfg.policy, robot, task, cfg.rename_map)
+    return _LOADED[key]
+
+
+def _node() -> str | None:
+    import ray
+
+    return ray.get_runtime_context().get_node_id() if ray.is_initialized() else None

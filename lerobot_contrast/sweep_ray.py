@@ -1,0 +1,108 @@
+"""The sweep's cells as Ray tasks: one CPU each (and a GPU for a policy on cuda), retried on another worker when
+theirs dies, watched through their journals for the progress view."""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import ray
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from lerobot_contrast.sweep_cell import CellOutcome, run_cell, wants_gpu
+from lerobot_contrast.sweep_file import Cell
+
+POLL_S = 0.5
+
+
+@dataclass
+class RayArgs:
+    # The Ray cluster to join: auto (the one `ray start --head` runs on this machine) or ray://HOST:10001 (a
+    # remote head's client port). Default: start a Ray for this sweep on this machine only.
+    address: str | None = None
+    # CPUs of the Ray started on this machine, which is how many cells run at once (default: all its cores).
+    num_cpus: int | None = None
+
+
+@dataclass
+class Watch:
+    """Trial counts of the running cells, read from their journals (on the driver's file system, shared with
+    the workers), for the progress bar."""
+
+    planned: dict[str, int]
+    finished: dict[str, int] = field(default_factory=dict)
+
+    def trials(self, cells: Sequence[Cell]) -> int:
+        return sum(self.finished.get(c.name, _journal_lines(Path(c.config.output_dir))) for c in cells)
+
+
+def _journal_lines(run_dir: Path) -> int:
+    try:
+        with (run_dir / "journal.jsonl").open("rb") as handle:
+            return sum(block.count(b"\n") for block in iter(lambda: handle.read(1 << 20), b""))
+    except FileNotFoundError:
+        return 0
+
+
+def start_ray(args: RayArgs) -> None:
+    """Join the cluster `args` names, or start a local Ray; a Ray this process already joined is used as is."""
+    if ray.is_initialized():
+        return
+    local = {"num_cpus": args.num_cpus or os.cpu_count(), "include_dashboard": False}
+    quiet = {"log_to_driver": False, "logging_level": logging.WARNING}
+    ray.init(address=args.address, **quiet, **({} if args.address else local))
+
+
+def run_cells(
+    cells: Sequence[Cell],
+    planned: dict[str, int],
+    max_retries: int,
+    report: Callable[[CellOutcome], None],
+    console: Console,
+) -> list[CellOutcome]:
+    """Run every cell as a Ray task and return their outcomes in the cells' order, calling `report` as each ends."""
+    task = ray.remote(run_cell)
+    refs = {
+        task.options(
+            num_cpus=1, num_gpus=int(wants_gpu(cell.config.policy)), max_retries=max_retries, name=f"cell {cell.name}"
+        ).remote(cell.name, cell.config): cell
+        for cell in cells
+    }
+    watch, outcomes = Watch(planned), {}
+    with _progress(console) as progress:
+        cell_bar = progress.add_task("cells", total=len(cells))
+        trial_bar = progress.add_task("trials", total=sum(planned.values()))
+        pending = list(refs)
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=len(pending), timeout=POLL_S)
+            for ref in ready:
+                outcome = _outcome(refs[ref], ref, max_retries)
+                outcomes[outcome.name] = outcome
+                watch.finished[outcome.name] = planned[outcome.name] if outcome.status == "complete" else 0
+                report(outcome)
+            progress.update(cell_bar, completed=len(outcomes))
+            progress.update(trial_bar, completed=watch.trials(cells))
+    return [outcomes[cell.name] for cell in cells]
+
+
+def _outcome(cell: Cell, ref: ray.ObjectRef, max_retries: int) -> CellOutcome:
+    try:
+        return ray.get(ref)
+    except ray.exceptions.RayError as error:  # its worker died on every attempt, or its node is gone
+        reason = " ".join(str(error).split())[:300]
+        return CellOutcome(cell.name, "failed", error=f"lost after {max_retries + 1} attempts ({reason})")
+
+
+def _progress(console: Console) -> Progress:
+    return Progress(
+        TextColumn("{task.description:>6}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        disable=not console.is_terminal,
+    )
