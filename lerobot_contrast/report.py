@@ -9,8 +9,9 @@ from pathlib import Path
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.metrics import METRICS
 from lerobot_contrast.record.hub import parse_hub_spec
+from lerobot_contrast.record.sweep_dir import is_sweep_dir
 from lerobot_contrast.reporting import build_report, load_run
-from lerobot_contrast.reporting.runs import distinct_runs
+from lerobot_contrast.reporting.runs import distinct_runs, run_specs
 
 
 class ReportArgsError(UserError):
@@ -25,16 +26,22 @@ class _Parser(argparse.ArgumentParser):
 def parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="python -m lerobot_contrast.report",
-        description="Summarise run directories of lerobot_contrast.eval: report.md with 95% intervals, and the "
-        "paper's figures. Runs that differ only in --seed are pooled; a complete standard run of the same "
+        description="Summarise run directories of lerobot_contrast.eval (or every cell of a lerobot_contrast.sweep "
+        "folder): report.md with 95% intervals, and the paper's figures. Runs that differ only in --seed are pooled; a complete standard run of the same "
         "policy, evaluation set and seed serves as the full i.i.d. reference for the estimation error.",
     )
-    p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run directories written by lerobot_contrast.eval")
+    p.add_argument(
+        "runs",
+        nargs="+",
+        metavar="RUN_DIR",
+        help="run directories written by lerobot_contrast.eval, or sweep folders written by lerobot_contrast.sweep",
+    )
     p.add_argument(
         "--output_dir",
         type=Path,
         default=None,
-        help="where to write the report (default: RUN_DIR/report of the first local run, else ./report)",
+        help="where to write the report (default: report/ in the first local run directory or sweep folder, "
+        "else ./report)",
     )
     p.add_argument(
         "--metric",
@@ -46,17 +53,21 @@ def parser() -> argparse.ArgumentParser:
 
 
 def default_output_dir(specs: list[str], runs: list) -> Path:
-    """report/ in the first local run directory; ./report when every input is downloaded (never the Hub cache)."""
-    local = [run for spec, run in zip(specs, runs, strict=True) if parse_hub_spec(spec) is None]
+    """report/ in the first local run directory or sweep folder; ./report when every input is downloaded (never the
+    Hub cache)."""
+    if parse_hub_spec(specs[0]) is None and is_sweep_dir(Path(specs[0])):
+        return Path(specs[0]) / "report"
+    local = [run for spec, run in zip(run_specs(specs), runs, strict=True) if parse_hub_spec(spec) is None]
     return local[0].path / "report" if local else Path("report")
 
 
 def main(argv: list[str] | None = None) -> int:
     try:
         args = parser().parse_args(argv)
-        given = [load_run(spec) for spec in args.runs]
+        specs = run_specs(args.runs)
+        given = [load_run(spec) for spec in specs]
         output_dir = args.output_dir or default_output_dir(args.runs, given)
-        runs, repeats = distinct_runs(args.runs, given)
+        runs, repeats = distinct_runs(specs, given)
         for line in repeats:
             print(f"note: {line}")
         try:

@@ -12,10 +12,11 @@ import pandas as pd
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
-from lerobot_contrast.record.hub import resolve_run
+from lerobot_contrast.record.hub import parse_hub_spec, resolve_run
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.results import read_results
 from lerobot_contrast.record.run_dir import comparable_settings
+from lerobot_contrast.record.sweep_dir import cell_run_dirs, is_sweep_dir
 from lerobot_contrast.reporting.stats import frame
 
 # Settings that say how a run was recorded or where its plan came from, not what it evaluated (besides those
@@ -87,6 +88,21 @@ def load_run(spec: str) -> Run:
     config = _read_json(config_path)
     summary = _read_json(path / "summary.json") if (path / "summary.json").exists() else {}
     return Run(path=path, config=config, summary=summary, results=_read_trials(path))
+
+
+def run_specs(specs: list[str]) -> list[str]:
+    """The report inputs with each sweep folder (written by lerobot_contrast.sweep) replaced by its cells' run
+    directories."""
+    out = []
+    for spec in specs:
+        if parse_hub_spec(spec) is not None or not is_sweep_dir(Path(spec)):
+            out.append(spec)
+            continue
+        cells = cell_run_dirs(Path(spec))
+        if not cells:
+            raise ReportInputError(f"{spec}: a sweep folder none of whose cells has started; run the sweep first")
+        out += [str(cell) for cell in cells]
+    return out
 
 
 def distinct_runs(specs: list[str], runs: list[Run]) -> tuple[list[Run], list[str]]:
