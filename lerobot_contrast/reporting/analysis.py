@@ -48,7 +48,7 @@ def summary_row(label: str, seeds: str, df: pd.DataFrame, runs: list[Run]) -> Su
     """Counts, mean total cost per run, trials per unit cost, and every metric with its interval."""
     cost = float(np.mean([stats.total_cost(r.results) for r in runs]))
     per_cost = float(np.mean([stats.trials_per_unit_cost(r.results) for r in runs]))
-    estimates = {m: stats.metric_estimate(df, m, rng()) for m in METRICS}
+    estimates = {m: stats.metric_estimate(df, m) for m in METRICS}
     return SummaryRow(label, seeds, stats.status_counts(df), cost, per_cost, estimates)
 
 
@@ -66,7 +66,7 @@ def summary_rows(groups: list[Group]) -> list[SummaryRow]:
 
 def by_column(groups: list[Group], column: str, metric: str) -> dict[str, dict[str, stats.Estimate]]:
     """Per group (pooled over seeds): the metric per perturbation or per family."""
-    return {g.label: stats.grouped_estimates(g.pooled, column, metric, rng()) for g in groups}
+    return {g.label: stats.grouped_estimates(g.pooled, column, metric) for g in groups}
 
 
 def sensitivities(groups: list[Group], metric: str) -> dict[str, dict[str, stats.Estimate]]:
@@ -162,4 +162,4 @@ def with_overall(
 ) -> dict[str, dict[str, stats.Estimate]]:
     """`table` with each group's estimate over all its trials first, under "all"."""
     pooled = {g.label: g.pooled for g in groups}
-    return {label: {"all": stats.metric_estimate(pooled[label], metric, rng()), **per} for label, per in table.items()}
+    return {label: {"all": stats.metric_estimate(pooled[label], metric), **per} for label, per in table.items()}

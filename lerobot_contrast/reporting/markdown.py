@@ -13,9 +13,9 @@ from lerobot_contrast.reporting.figures import METRIC_NAMES
 from lerobot_contrast.reporting.runs import Run
 
 METHODS = {
-    "wilson": "Wilson score interval (binary outcomes, independent trials)",
+    "korn_graubard": "fixed-n: Korn-Graubard interval (Clopper-Pearson at the effective sample size of the "
+    "base-instance clusters, t degrees of freedom)",
     "cluster_bootstrap": "cluster bootstrap over base instances (2,000 resamples, small-sample widened percentile)",
-    "wilson_clusters": "Wilson interval counting each base instance once (every outcome equal)",
 }
 
 
