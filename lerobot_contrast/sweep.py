@@ -83,7 +83,8 @@ def index_entries(cells: list[Cell], outcomes: dict[str, CellOutcome]) -> list[d
         entry = {"name": cell.name, "settings": cell.settings, "status": "pending"}
         if outcome is not None:
             entry |= {"status": outcome.status, "trials": outcome.trials, "seconds": round(outcome.seconds, 1)}
-            entry |= {"cpu_s": round(outcome.cpu_s, 1), "node": outcome.node, "error": outcome.error}
+            entry |= {"cpu_s": round(outcome.cpu_s, 1), "node": outcome.node, "pid": outcome.pid}
+            entry |= {"policy_loaded": outcome.policy_loaded, "error": outcome.error}
         entries.append(entry)
     return entries
 

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from lerobot_contrast.build import make_robot
+from lerobot_contrast.build import make_robot, register_robots
 from lerobot_contrast.config import EvalConfig, config_json
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.task import Task
@@ -38,6 +39,8 @@ class CellOutcome:
     seconds: float = 0.0
     cpu_s: float = 0.0  # CPU time of the worker process while it ran the cell
     node: str | None = None  # the Ray node that ran it
+    pid: int | None = None  # the worker process that ran it
+    policy_loaded: bool = False  # whether it loaded its learned policy, rather than finding it loaded
     error: str | None = None  # one line
     detail: str | None = None  # the traceback of an unexpected error
 
@@ -51,9 +54,13 @@ def run_cell(name: str, cfg: EvalConfig) -> CellOutcome:
     own errors, so one bad cell does not stop the sweep."""
     start, cpu_start = time.perf_counter(), time.process_time()
 
+    loaded_before = len(_LOADED)
+
     def outcome(status: str, trials: int = 0, error: str | None = None, detail: str | None = None) -> CellOutcome:
-        seconds, cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
-        return CellOutcome(name, status, trials, seconds, cpu_s, _node(), error, detail)
+        seconds, cpu_s, loaded = time.perf_counter() - start, time.process_time() - cpu_start, len(_LOADED)
+        return CellOutcome(
+            name, status, trials, seconds, cpu_s, _node(), os.getpid(), loaded > loaded_before, error, detail
+        )
 
     try:
         trials = _run(dataclasses.replace(cfg))
@@ -71,6 +78,7 @@ def _run(cfg: EvalConfig) -> int:
     cfg.resume = (run_dir / "config.json").is_file()  # an earlier attempt, killed or interrupted, started it
     if cfg.resume and is_complete(run_dir):
         return len(read_journal(run_dir / "journal.jsonl"))
+    register_robots()  # LeRobot's robots and its policy and robot plugins, as the eval command has them
     planned = planned_evaluation(cfg)
     robot = make_robot(cfg)
     connect(robot)
