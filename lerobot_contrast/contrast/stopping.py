@@ -1,0 +1,176 @@
+"""Sequential stopping rules, checked after every trial: stop once the anytime-valid interval of the headline metric
+is narrower than `width`, or once the paired difference from a finished run of the same plan is decided.
+
+Base instances are the i.i.d. units: a base's trials update the confidence sequences when its last planned trial is
+recorded, each base weighted by its share of the most trials any base has planned (see confseq). The state is a
+function of the records in trial order, so a resumed run rebuilds it from its journal exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from lerobot_contrast.contrast.confseq import ConfidenceSequence, difference_bounds, difference_unit
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.strategy import PlannedTrial
+from lerobot_contrast.contrast.trial import TrialRecord
+
+HEADLINE_METRICS = ("spl", "progress")  # the report's rule: SPL where recorded, else subgoal progress
+
+
+class StopError(UserError):
+    pass
+
+
+@dataclass(frozen=True)
+class StopRule:
+    """`width`: stop when the headline metric's anytime-valid interval is at most this wide. `reference`: the
+    headline value of each done trial (by plan index) of the run compared against. `alpha`: 1 - confidence."""
+
+    width: float | None = None
+    alpha: float = 0.05
+    reference: Mapping[int, float] | None = None
+    reference_name: str = ""
+
+    def __post_init__(self) -> None:
+        if self.width is not None and not 0.0 < self.width < 1.0:
+            raise StopError(f"--stop.width must be between 0 and 1 (exclusive), got {self.width:g}")
+        if not 0.0 < self.alpha < 1.0:
+            raise StopError(f"--stop.alpha must be between 0 and 1 (exclusive), got {self.alpha:g}")
+
+    @property
+    def active(self) -> bool:
+        return self.width is not None or self.reference is not None
+
+
+def excludes_zero(low: Any, high: Any) -> Any:
+    """A paired comparison is decided once its interval for the difference leaves out 0 (arrays work too)."""
+    return (np.asarray(low) > 0.0) | (np.asarray(high) < 0.0)
+
+
+def headline_metric(records: Iterable[TrialRecord]) -> str:
+    """SPL where any done trial recorded it, else subgoal progress (success itself for tasks without subgoals)."""
+    return "spl" if any(r.status == "done" and r.spl is not None for r in records) else "progress"
+
+
+def headline_value(record: TrialRecord, metric: str) -> float | None:
+    if record.status != "done":
+        return None
+    value = getattr(record, metric)
+    return None if value is None else float(value)
+
+
+class Monitor:
+    """The sequential state of one run: fed each record in trial order by `observe`, it says when to stop."""
+
+    def __init__(self, plan: list[PlannedTrial], rule: StopRule, metric: str | None = None) -> None:
+        self.rule, self.metric = rule, metric  # None: the first done trial decides (see `headline_metric`)
+        self.last_index: dict[str, int] = {}
+        for trial in plan:
+            self.last_index[trial.base.id] = trial.index
+        counts = np.unique([t.base.id for t in plan], return_counts=True)[1] if plan else np.ones(1)
+        self.most_trials = float(counts.max())
+        self.open: dict[str, list[tuple[float, float | None]]] = {}
+        self.interval = ConfidenceSequence(rule.alpha)
+        self.difference = ConfidenceSequence(rule.alpha) if rule.reference is not None else None
+        self.bases = 0
+        self.reason: str | None = None
+
+    def observe(self, record: TrialRecord) -> str | None:
+        """Take one record; return why the run stops now, or None to go on."""
+        if self.metric is None and record.status == "done":
+            self.metric = headline_metric([record])
+        value = None if self.metric is None else headline_value(record, self.metric)
+        if self.metric == "spl" and record.status == "done" and value is None:
+            raise StopError(
+                f"--stop: trial {record.index} recorded no SPL, which this run's headline metric needs "
+                f"(the task gives no reference path); compare runs of a task that records SPL throughout"
+            )
+        if value is not None:
+            other = None if self.rule.reference is None else self.rule.reference.get(record.index)
+            self.open.setdefault(record.base_id, []).append((value, other))
+        if self.last_index.get(record.base_id) == record.index:
+            self._close(self.open.pop(record.base_id, []))
+        if self.reason is None:
+            self.reason = self._verdict()
+        return self.reason
+
+    def _close(self, values: list[tuple[float, float | None]]) -> None:
+        """A base is complete: its mean (and mean paired difference) joins the sequences as one unit."""
+        if values:
+            own = np.array([v for v, _ in values])
+            self.interval.update(own.mean(), len(own) / self.most_trials)
+            self.bases += 1
+        paired = [(v, o) for v, o in values if o is not None]
+        if self.difference is not None and paired:
+            a, b = np.array(paired).T
+            self.difference.update(difference_unit(a, b).mean(), len(paired) / self.most_trials)
+
+    def _verdict(self) -> str | None:
+        if self.difference is not None and excludes_zero(*self.bounds_difference()):
+            return "decided"
+        if self.rule.width is not None and self.bases and self.high - self.low <= self.rule.width:
+            return "width"
+        return None
+
+    @property
+    def low(self) -> float:
+        return float(self.interval.low[0])
+
+    @property
+    def high(self) -> float:
+        return float(self.interval.high[0])
+
+    def bounds_difference(self) -> tuple[float, float]:
+        low, high = difference_bounds(self.difference)
+        return float(low[0]), float(high[0])
+
+    def report(self, planned_end: bool) -> dict[str, Any]:
+        """What the summary says: the rule, why the run stopped, and the anytime-valid intervals at that point."""
+        out: dict[str, Any] = {
+            "metric": self.metric,
+            "alpha": self.rule.alpha,
+            "width": self.rule.width,
+            "complete_bases": self.bases,
+            "anytime_interval": [self.low, self.high],
+            "reason": self.reason or ("plan_end" if planned_end else "not_stopped"),
+            "why": reason_text(self.reason or ("plan_end" if planned_end else "not_stopped"), self.rule),
+        }
+        if self.difference is not None:
+            low, high = self.bounds_difference()
+            verdict = "undecided" if low <= 0.0 <= high else ("better" if low > 0.0 else "worse")
+            out |= {"compare": self.rule.reference_name, "difference_interval": [low, high], "verdict": verdict}
+        return out
+
+    def line(self) -> str:
+        """The console's view: the anytime-valid interval (and difference), labelled apart from fixed-n ones."""
+        text = f"anytime-valid {100 * (1 - self.rule.alpha):g}% CS {self.metric} [{self.low:.3f}, {self.high:.3f}]"
+        if self.difference is not None:
+            low, high = self.bounds_difference()
+            text += f", diff vs {self.rule.reference_name} [{low:+.3f}, {high:+.3f}]"
+        return text + f" ({self.bases} bases)"
+
+
+def reason_text(reason: str, rule: StopRule) -> str:
+    """One sentence for the summary and console."""
+    return {
+        "decided": f"the paired difference from {rule.reference_name} was decided at alpha={rule.alpha:g}",
+        "width": f"the anytime-valid interval was at most {rule.width} wide",
+        "plan_end": "the plan (or its budget) ended before any stopping rule fired",
+        "not_stopped": "the run was interrupted or ran out of budget before any stopping rule fired",
+    }[reason]
+
+
+def reference_values(records: Iterable[TrialRecord], metric: str) -> dict[int, float]:
+    """The compared run's headline value per trial index (done trials only)."""
+    out = {}
+    for record in records:
+        value = headline_value(record, metric)
+        if value is not None and math.isfinite(value):
+            out[record.index] = value
+    return out
