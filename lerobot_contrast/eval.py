@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import sys
 from datetime import datetime
 from pathlib import Path
@@ -12,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from lerobot_contrast.build import (
+    OPERATORS,
     check_robot_type,
     make_observers,
     make_operator,
@@ -38,25 +40,72 @@ if TYPE_CHECKING:
     from lerobot.robots import Robot
 
 
+# Base instances times repeats one run may plan: beyond this, planning alone takes minutes and gigabytes.
+MAX_BASE_TRIALS = 10_000
+
+
 def validate(cfg: EvalConfig) -> None:
-    if cfg.n_instances is not None and cfg.n_instances < 1:
-        raise ConfigError(f"--n_instances must be at least 1, got {cfg.n_instances}")
-    if cfg.max_episode_steps < 1:
-        raise ConfigError(f"--max_episode_steps must be at least 1, got {cfg.max_episode_steps}")
-    if cfg.resume and cfg.output_dir is None:
-        raise ConfigError("--resume needs --output_dir naming the run directory to continue")
+    """Refuse every flag value that cannot make a sound run, before anything is planned, connected or written."""
+    for name, value in (("n_instances", cfg.n_instances), ("max_episode_steps", cfg.max_episode_steps)):
+        if value is not None and value < 1:
+            raise ConfigError(f"--{name} must be at least 1, got {value}")
+    if cfg.repeats < 1:
+        raise ConfigError(f"--repeats must be at least 1, got {cfg.repeats}")
+    if cfg.seed < 0:
+        raise ConfigError(f"--seed must be a whole number >= 0, got {cfg.seed}")
+    for name, value in (("fps", cfg.fps), ("max_episode_s", cfg.max_episode_s)):
+        _check_positive(name, value, "leave it out for the default")
+    _check_positive("budget", cfg.budget, "drop --budget for no limit")
+    for name, values in (("perturbations", cfg.perturbations), ("families", cfg.families)):
+        repeated = sorted({v for v in values or () if list(values).count(v) > 1})
+        if repeated:
+            raise ConfigError(f"--{name}: {', '.join(repeated)} given more than once; name each once")
+    if cfg.operator is not None and cfg.operator not in OPERATORS:
+        raise ConfigError(f"--operator: unknown mode {cfg.operator!r}; choose from: {', '.join(OPERATORS)}")
+    _check_policy_args(cfg)
+    _check_run_dir(cfg)
     if cfg.push_to_hub and cfg.repo_id is None:
         raise ConfigError("--push_to_hub needs --repo_id=USER/NAME naming the Hub dataset repo to publish to")
+    if cfg.repo_id is not None:
+        from lerobot_contrast.record.hub import check_repo_id
+
+        check_repo_id(cfg.repo_id)
     if cfg.perturbations is not None and cfg.strategy != "contrast":
         raise ConfigError(f"--perturbations only applies to --strategy=contrast, not {cfg.strategy!r}")
+
+
+def _check_positive(name: str, value: float | None, otherwise: str) -> None:
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise ConfigError(f"--{name} must be a positive number, got {value:g}; {otherwise}")
+
+
+def _check_policy_args(cfg: EvalConfig) -> None:
+    noise, blind = cfg.policy.noise_std, cfg.policy.language_blind
+    if not (math.isfinite(noise) and noise >= 0):
+        raise ConfigError(f"--policy.noise_std must be a number of metres >= 0, got {noise:g}")
+    if not 0 <= blind <= 1:
+        raise ConfigError(f"--policy.language_blind is a probability between 0 and 1, got {blind:g}")
+
+
+def _check_run_dir(cfg: EvalConfig) -> None:
+    if cfg.resume and cfg.output_dir is None:
+        raise ConfigError("--resume needs --output_dir naming the run directory to continue")
+    if cfg.output_dir is not None and cfg.output_dir.exists() and not cfg.output_dir.is_dir():
+        raise ConfigError(f"--output_dir: {cfg.output_dir} is a file, not a directory; choose a directory")
 
 
 def build_plan(cfg: EvalConfig) -> tuple[Task, list[PlannedTrial]]:
     """The task and the ordered trials; depends only on the config, so a resumed run rebuilds the same plan."""
     task = load_task(cfg.task, families=cfg.families)
     perturbations = task.perturbations.select(cfg.perturbations) if cfg.strategy == "contrast" else []
+    n_instances = cfg.n_instances or task.default_instances
+    if n_instances * cfg.repeats > MAX_BASE_TRIALS:
+        raise ConfigError(
+            f"--n_instances={n_instances} with --repeats={cfg.repeats} asks for more than {MAX_BASE_TRIALS} "
+            "base trials in one run; split the evaluation into runs with different --seed values"
+        )
     rng = np.random.default_rng(cfg.seed)
-    instances = task.sample(cfg.n_instances or task.default_instances, rng)
+    instances = task.sample(n_instances, rng)
     return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order)
 
 

@@ -92,6 +92,11 @@ def policy_entry(args: PolicyArgs) -> PolicyEntry:
 def make_policy(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str] | None = None) -> Policy:
     """The policy `args` names, built for `robot` and `task`; a one-line PolicyError where it cannot run there."""
     entry = policy_entry(args)
+    if rename_map and entry.build != PRETRAINED_BUILD:
+        raise PolicyError(
+            f"--rename_map: --policy.type={entry.name} reads the robot's own keys; --rename_map is for a LeRobot "
+            "policy (--policy.path or a LeRobot --policy.type)"
+        )
     if entry.path is not None:
         args = dataclasses.replace(args, path=entry.path)
     return entry.builder()(args, robot, task, dict(rename_map or {}))

@@ -96,7 +96,23 @@ def _fresh_config(
     return config
 
 
+def _check_rename_map(config: PreTrainedConfig, features: dict[str, dict], rename_map: Mapping[str, str]) -> None:
+    """Every key renamed is one the robot gives, and every new name is one the policy reads."""
+    robot_keys = sorted(key for key in features if key != "action")
+    for key, name in rename_map.items():
+        if key not in robot_keys:
+            raise PolicyLoadError(
+                f"--rename_map: the robot gives no {key!r}; map one of its keys ({', '.join(robot_keys)})"
+            )
+        if name not in config.input_features:
+            raise PolicyLoadError(
+                f"--rename_map: {key!r} is mapped to {name!r}, which the policy does not read "
+                f"(it reads {', '.join(sorted(config.input_features)) or 'nothing'})"
+            )
+
+
 def _check_inputs(config: PreTrainedConfig, features: dict[str, dict], rename_map: Mapping[str, str]) -> None:
+    _check_rename_map(config, features, rename_map)
     provided = {rename_map.get(key, key) for key in features if key != "action"}
     missing = sorted(set(config.input_features) - provided)
     if missing:
@@ -126,6 +142,18 @@ def _resizes(config: PreTrainedConfig, expected: tuple[int, ...], actual: tuple[
     return same_channels and any(getattr(config, name, None) is not None for name in RESIZE_FIELDS)
 
 
+def _build_policy(config: PreTrainedConfig, path: str | None) -> Any:
+    policy_class = get_policy_class(config.type)
+    try:
+        return policy_class.from_pretrained(path, config=config) if path is not None else policy_class(config)
+    except ValueError as error:  # LeRobot's policies check their config's features as they are built
+        flag = f"--policy.path={path}" if path is not None else f"--policy.type={config.type}"
+        raise PolicyLoadError(
+            f"{flag}: cannot build the policy ({' '.join(str(error).split())[:200]}); its config.json must "
+            "declare the input and output features it was trained with"
+        ) from None
+
+
 class PretrainedPolicy:
     """A LeRobot policy loaded from `--policy.path` (or built fresh from `--policy.type`) for one robot."""
 
@@ -146,11 +174,7 @@ class PretrainedPolicy:
         else:
             config = _fresh_config(str(policy_type), device, self.features)
         _check_inputs(config, self.features, rename_map)
-        policy_class = get_policy_class(config.type)
-        if path is not None:
-            self.policy = policy_class.from_pretrained(path, config=config)
-        else:
-            self.policy = policy_class(config)
+        self.policy = _build_policy(config, path)
         self.policy.to(config.device).eval()
         overrides = {"device_processor": {"device": str(config.device)}}
         if rename_map:

@@ -13,7 +13,12 @@ from pathlib import Path
 
 import httpx
 from huggingface_hub import CommitOperationAdd, CommitOperationDelete, HfApi, snapshot_download
-from huggingface_hub.errors import HfHubHTTPError, RepositoryNotFoundError, RevisionNotFoundError
+from huggingface_hub.errors import (
+    HfHubHTTPError,
+    LocalEntryNotFoundError,
+    RepositoryNotFoundError,
+    RevisionNotFoundError,
+)
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.record.card import dataset_card
@@ -177,22 +182,28 @@ def download_run(
     journal, plan and report come (what `report` and `eval --plan` read), not the Rerun files or the dataset."""
     check_repo_id(repo_id)
     api = HfApi(endpoint=endpoint, token=token)
-    path = _with_retries(
-        lambda: snapshot_download(
+    try:
+        path = _with_retries(
+            lambda: snapshot_download(
+                repo_id,
+                repo_type="dataset",
+                revision=revision,
+                local_dir=local_dir,
+                allow_patterns=None if episodes else RUN_PATTERNS,
+                token=token,
+                endpoint=endpoint,
+            ),
+            "download the run",
+            api,
             repo_id,
-            repo_type="dataset",
-            revision=revision,
-            local_dir=local_dir,
-            allow_patterns=None if episodes else RUN_PATTERNS,
-            token=token,
-            endpoint=endpoint,
-        ),
-        "download the run",
-        api,
-        repo_id,
-        attempts,
-        backoff_s,
-    )
+            attempts,
+            backoff_s,
+        )
+    except LocalEntryNotFoundError:  # the client's word for "offline, and not in the cache either"
+        raise HubError(
+            f"hub:{repo_id}: cannot reach the Hub at {api.endpoint} and the local Hub cache holds no copy; "
+            "check the network connection (or HF_ENDPOINT) and try again"
+        ) from None
     run_dir = Path(path)
     if not all((run_dir / name).is_file() for name in ("config.json", "results.parquet")):
         raise HubError(f"hub:{repo_id} holds no lerobot-contrast run (no config.json and results.parquet)")

@@ -132,7 +132,7 @@ def _evaluation_set(root: Node, templates, world: World):
         return None, None
     sampler.check_keys(("seed",))
     seed = sampler.get("seed")
-    return None, None if seed is None else seed.integer()
+    return None, None if seed is None else seed.integer(minimum=0)
 
 
 def _check_sampling(root: Node, spec: TaskSpec) -> None:

@@ -4,6 +4,7 @@ cursor that walks the parsed data and reports every problem as `file:line: key: 
 from __future__ import annotations
 
 import difflib
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any, NoReturn
@@ -11,6 +12,9 @@ from typing import Any, NoReturn
 import yaml
 
 from lerobot_contrast.contrast.errors import UserError
+
+# No number in a task file is larger than this in its own units: a larger one is a typo (or not finite).
+MAX_MAGNITUDE = 1e6
 
 
 class TaskFileError(UserError):
@@ -59,7 +63,14 @@ _LineLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_SEQUENCE_TAG, _se
 
 def load_yaml(text: str, source: str) -> Any:
     """Parse YAML text, keeping line numbers; syntax errors become one-line TaskFileErrors."""
-    loader = _LineLoader(text)
+    try:
+        loader = _LineLoader(text)  # reads the whole text, refusing NUL bytes and other control characters
+    except yaml.reader.ReaderError as error:
+        line = text.count("\n", 0, error.position) + 1
+        raise TaskFileError(
+            f"{source}:{line}: invalid YAML: character code {error.character} (a NUL byte or another control "
+            "character) is not allowed in a task file; remove it"
+        ) from None
     loader.name = source
     try:
         return loader.get_single_data()
@@ -69,6 +80,10 @@ def load_yaml(text: str, source: str) -> Any:
         raise TaskFileError(f"{source}{line}: invalid YAML: {error.problem or error.context}") from None
     except yaml.YAMLError as error:
         raise TaskFileError(f"{source}: invalid YAML: {' '.join(str(error).split())}") from None
+    except RecursionError:
+        raise TaskFileError(
+            f"{source}: invalid YAML: lists or mappings nested too deeply to read; a task file needs a few levels"
+        ) from None
     finally:
         loader.dispose()
 
@@ -153,13 +168,17 @@ class Node:
         if isinstance(self.value, bool) or not isinstance(self.value, int | float):
             self.fail(f"expected a number, got {_kind(self.value)}")
         value = float(self.value)
+        if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
+            self.fail(f"expected a number between {-MAX_MAGNITUDE:g} and {MAX_MAGNITUDE:g}, got {value:g}")
         if minimum is not None and (value <= minimum if strict else value < minimum):
             self.fail(f"expected a number {'>' if strict else '>='} {minimum:g}, got {value:g}")
         return value
 
-    def integer(self) -> int:
+    def integer(self, minimum: int | None = None) -> int:
         if isinstance(self.value, bool) or not isinstance(self.value, int):
             self.fail(f"expected a whole number, got {_kind(self.value)}")
+        if minimum is not None and self.value < minimum:
+            self.fail(f"expected a whole number >= {minimum}, got {self.value}")
         return self.value
 
     def boolean(self) -> bool:

@@ -114,15 +114,29 @@ def parse_workspace(node: Node) -> Workspace:
         min_spacing=DEFAULT_MIN_SPACING_M if spacing is None else spacing.number(0.0) * scale,
         regions=regions,
         robot_start=robot_start,
-        storage=None if storage is None else _storage(storage, scale),
+        storage=None if storage is None else _storage(storage, scale, area),
     )
 
 
-def _storage(node: Node, scale: float) -> tuple[tuple[float, float], tuple[float, float]]:
+def diagonal(area: Region) -> float:
+    (x0, x1), (y0, y1) = area.box
+    return math.hypot(x1 - x0, y1 - y0)
+
+
+def _storage(node: Node, scale: float, area: Region) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Two points beside the workspace: further than its own size away, every first trial's cost is absurd."""
     if not isinstance(node.value, list) or len(node.value) != 2:
         node.fail("expected two points [[x, y], [x, y]]: the objects wait in a row between them")
-    first, last = node.elements()
-    return point(first, scale), point(last, scale)
+    points = [point(child, scale) for child in node.elements()]
+    (x0, x1), (y0, y1) = area.box
+    reach = diagonal(area)
+    for child, (x, y) in zip(node.elements(), points, strict=True):
+        if math.hypot(max(x0 - x, 0.0, x - x1), max(y0 - y, 0.0, y - y1)) > reach:
+            child.fail(
+                f"the storage point lies further from the workspace than its size ({reach / scale:.3g} "
+                f"{_unit(scale)}); objects wait beside the workspace, so put it nearer"
+            )
+    return points[0], points[1]
 
 
 def default_words(name: str, attributes: dict[str, str]) -> tuple[str, ...]:
@@ -198,8 +212,14 @@ def parse_cost(node: Node | None, workspace: Workspace, objects: dict[str, Objec
         child = node.get(key)
         return fallback if child is None else child.number(0.0, strict=strict) * scale
 
+    tolerance = length("tolerance", spec.tolerance)
+    if tolerance >= diagonal(workspace.area):
+        node.get("tolerance").fail(
+            f"a tolerance of {tolerance / scale:g} {workspace.units} is as large as the whole workspace, so no move "
+            "would ever count; give the displacement (in the workspace units) below which a move is free"
+        )
     return CostSpec(
-        tolerance=length("tolerance", spec.tolerance),
+        tolerance=tolerance,
         add_remove=length("add_remove", spec.add_remove),
         hand_speed=length("hand_speed", spec.hand_speed, strict=True),
         default_handling_s=default,
