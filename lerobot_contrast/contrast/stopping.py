@@ -17,6 +17,7 @@ import numpy as np
 
 from lerobot_contrast.contrast.confseq import ConfidenceSequence, difference_bounds, difference_unit
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.intervals import korn_graubard
 from lerobot_contrast.contrast.strategy import PlannedTrial
 from lerobot_contrast.contrast.trial import TrialRecord
 
@@ -78,7 +79,8 @@ class Monitor:
         self.open: dict[str, list[tuple[float, float | None]]] = {}
         self.interval = ConfidenceSequence(rule.alpha)
         self.difference = ConfidenceSequence(rule.alpha) if rule.reference is not None else None
-        self.bases = 0
+        self.sums: list[float] = []  # per complete base: sum of its values and number, for the fixed-n interval
+        self.sizes: list[float] = []
         self.reason: str | None = None
 
     def observe(self, record: TrialRecord) -> str | None:
@@ -105,7 +107,8 @@ class Monitor:
         if values:
             own = np.array([v for v, _ in values])
             self.interval.update(own.mean(), len(own) / self.most_trials)
-            self.bases += 1
+            self.sums.append(float(own.sum()))
+            self.sizes.append(float(len(own)))
         paired = [(v, o) for v, o in values if o is not None]
         if self.difference is not None and paired:
             a, b = np.array(paired).T
@@ -114,9 +117,19 @@ class Monitor:
     def _verdict(self) -> str | None:
         if self.difference is not None and excludes_zero(*self.bounds_difference()):
             return "decided"
-        if self.rule.width is not None and self.bases and self.high - self.low <= self.rule.width:
+        if self.rule.width is not None and self.sizes and self.high - self.low <= self.rule.width:
             return "width"
         return None
+
+    @property
+    def bases(self) -> int:
+        return len(self.sizes)
+
+    def fixed_n(self) -> tuple[float, float]:
+        """The report's fixed-n interval over the complete bases: right only if this size was fixed in advance."""
+        if not self.sizes:
+            return (0.0, 1.0)
+        return korn_graubard(np.array(self.sums), np.array(self.sizes), 1 - self.rule.alpha)
 
     @property
     def low(self) -> float:
@@ -137,7 +150,9 @@ class Monitor:
             "alpha": self.rule.alpha,
             "width": self.rule.width,
             "complete_bases": self.bases,
+            "mean": float(sum(self.sums) / sum(self.sizes)) if self.sizes else None,
             "anytime_interval": [self.low, self.high],
+            "fixed_n_interval": list(self.fixed_n()),
             "reason": self.reason or ("plan_end" if planned_end else "not_stopped"),
             "why": reason_text(self.reason or ("plan_end" if planned_end else "not_stopped"), self.rule),
         }
@@ -148,8 +163,12 @@ class Monitor:
         return out
 
     def line(self) -> str:
-        """The console's view: the anytime-valid interval (and difference), labelled apart from fixed-n ones."""
-        text = f"anytime-valid {100 * (1 - self.rule.alpha):g}% CS {self.metric} [{self.low:.3f}, {self.high:.3f}]"
+        """The console's view: the fixed-n interval beside the anytime-valid one (and the difference), labelled
+        so that only the second reads as safe to stop on."""
+        level = f"{100 * (1 - self.rule.alpha):g}%"
+        low, high = self.fixed_n()
+        text = f"{self.metric}: fixed-n {level} [{low:.3f}, {high:.3f}] | "
+        text += f"anytime-valid {level} CS [{self.low:.3f}, {self.high:.3f}]"
         if self.difference is not None:
             low, high = self.bounds_difference()
             text += f", diff vs {self.rule.reference_name} [{low:+.3f}, {high:+.3f}]"

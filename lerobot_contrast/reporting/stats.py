@@ -16,6 +16,7 @@ import pandas as pd
 import pyarrow as pa
 from scipy import stats as distributions
 
+from lerobot_contrast.contrast.intervals import korn_graubard, t_quantile
 from lerobot_contrast.contrast.trial import Status, TrialRecord
 from lerobot_contrast.record.results import SCHEMA, record_row
 
@@ -75,11 +76,6 @@ def bootstrap_means(sums: np.ndarray, sizes: np.ndarray, rng: np.random.Generato
     return sums[pick].sum(axis=1) / sizes[pick].sum(axis=1)
 
 
-def t_quantile(dof: float) -> float:
-    """Student's t quantile of a two-sided CONFIDENCE interval with `dof` degrees of freedom."""
-    return float(distributions.t.ppf(0.5 + CONFIDENCE / 2, dof))
-
-
 def bootstrap_interval(draws: np.ndarray, mean: float, n_clusters: int) -> tuple[float, float]:
     """Percentile interval of the bootstrap means, widened about the mean for few clusters.
 
@@ -110,37 +106,6 @@ def bootstrap_estimate(
     return Estimate(mean, low, high, len(values), len(sums), "cluster_bootstrap")
 
 
-def korn_graubard(values: np.ndarray, clusters: np.ndarray) -> tuple[float, float]:
-    """Korn and Graubard's interval for a clustered mean in [0, 1]: Clopper-Pearson at the effective sample size
-    n* = p(1 - p) / v, with v the cluster-robust variance of the mean over trials and n* at most n, scaled by
-    (t_{n-1} / t_{k-1})^2 for the k - 1 degrees of freedom of v (k base instances).
-
-    Values strictly between 0 and 1 (SPL) vary less than a Bernoulli variable of their mean, so for them the
-    cap at n makes the interval conservative. With every value 0 (or every value 1) v is 0 and the design effect unknown; each base instance then counts
-    once (n* = k), as if its trials were one. Korn, E. L. and Graubard, B. I., "Confidence intervals for proportions
-    with small expected number of positive counts estimated from survey data", Survey Methodology 24(2), 1998.
-    """
-    sums, sizes = cluster_sums(values, clusters)
-    n, k = float(sizes.sum()), len(sums)
-    mean = float(sums.sum() / n)
-    if k < 2:
-        return _clopper_pearson(mean, 1.0)
-    degrees = (t_quantile(n - 1) / t_quantile(k - 1)) ** 2
-    if mean in (0.0, 1.0):
-        return _clopper_pearson(mean, k * degrees)
-    variance = k / (k - 1) * float(np.sum((sums - mean * sizes) ** 2)) / n**2
-    effective = (min(n, mean * (1.0 - mean) / variance) if variance > 0.0 else n) * degrees
-    return _clopper_pearson(mean, effective)
-
-
-def _clopper_pearson(mean: float, n: float) -> tuple[float, float]:
-    """Clopper-Pearson's interval for `mean * n` successes of `n` trials (either may be fractional)."""
-    x, tail = mean * n, (1 - CONFIDENCE) / 2
-    low = 0.0 if x <= 0 else float(distributions.beta.ppf(tail, x, n - x + 1))
-    high = 1.0 if x >= n else float(distributions.beta.ppf(1 - tail, x + 1, n - x))
-    return (low, high)
-
-
 def estimate(values: np.ndarray, clusters: np.ndarray) -> Estimate:
     """The mean over trials with a 95% interval that respects clustering by base instance (`korn_graubard`).
 
@@ -150,7 +115,7 @@ def estimate(values: np.ndarray, clusters: np.ndarray) -> Estimate:
     values, clusters = np.asarray(values, dtype=np.float64), np.asarray(clusters)
     if len(values) == 0:
         return Estimate(float("nan"), float("nan"), float("nan"), 0, 0, "none")
-    low, high = korn_graubard(values, clusters)
+    low, high = korn_graubard(*cluster_sums(values, clusters), CONFIDENCE)
     return Estimate(float(values.mean()), low, high, len(values), len(np.unique(clusters)), "korn_graubard")
 
 

@@ -81,7 +81,8 @@ def test_a_clearly_better_policy_is_decided_and_equal_ones_are_not():
     assert all(even.observe(record(t, t.index % 2 == 0)) is None for t in plan)
     report = even.report(planned_end=True)
     assert (report["reason"], report["verdict"]) == ("plan_end", "undecided")
-    assert "diff vs runs/same" in even.line() and even.line().startswith("anytime-valid 95% CS progress")
+    assert "diff vs runs/same" in even.line() and "| anytime-valid 95% CS [" in even.line()
+    assert even.line().startswith("progress: fixed-n 95% [")
 
 
 def test_trials_without_a_value_do_not_count_and_missing_spl_is_refused():
