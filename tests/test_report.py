@@ -157,3 +157,11 @@ def test_the_same_run_given_twice_is_counted_once_and_named_in_one_line(tmp_path
     other = tmp_path / "other"
     assert eval_main([*flags, "--max_episode_steps=20", "--seed=1", f"--output_dir={other}"]) == 0
     assert load_run(str(other)).identity != load_run(str(run)).identity
+
+
+def test_a_run_of_the_default_policy_is_labelled_with_its_name_not_as_the_oracle():
+    from lerobot_contrast.policies import DEFAULT_POLICY
+    from lerobot_contrast.reporting.runs import policy_label
+
+    assert policy_label({"policy": {"type": None, "path": None}}) == DEFAULT_POLICY
+    assert policy_label({"policy": {"type": "oracle", "noise_std": 0.01}}) == "oracle (noise std 0.01)"

@@ -12,6 +12,7 @@ import pandas as pd
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.policies.base import DEFAULT_POLICY
 from lerobot_contrast.record.hub import parse_hub_spec, resolve_run
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.results import read_results
@@ -161,7 +162,7 @@ def strategy_label(run: Run) -> str:
 
 def policy_label(config: dict[str, Any]) -> str:
     policy = config.get("policy") or {}
-    label = str(policy.get("path") or policy.get("type") or "oracle")
+    label = str(policy.get("path") or policy.get("type") or DEFAULT_POLICY)
     extras = [f"{key.replace('_', ' ')} {policy[key]:g}" for key in ("noise_std", "language_blind") if policy.get(key)]
     return label + (f" ({', '.join(extras)})" if extras and not policy.get("path") else "")
 
