@@ -147,8 +147,9 @@ def cell_config(path: Path, name: str, settings: dict[str, Any]) -> EvalConfig:
         raise SweepFileError(f"{path}: cell {name}: {' '.join(str(error).split())}") from None
     choose_robot(cfg)
     if cfg.robot.type not in SIMULATORS:
+        given = settings.get("robot.type", cfg.robot.type)  # LeRobot names some robots by their config's alias
         raise SweepFileError(
-            f"{path}: cell {name}: robot.type={cfg.robot.type} is a real robot, one physical place; a sweep runs "
+            f"{path}: cell {name}: robot.type={given} is a real robot, one physical place; a sweep runs "
             f"simulated cells only ({', '.join(SIMULATORS)}); evaluate it with python -m lerobot_contrast.eval"
         )
     return cfg

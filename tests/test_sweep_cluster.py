@@ -1,0 +1,38 @@
+"""A sweep on a multi-node Ray cluster (a head and a worker node on loopback, one CPU each): its cells run on
+both nodes and their results are gathered in one sweep folder."""
+
+import json
+
+import pandas as pd
+import pytest
+import ray
+import yaml
+from ray.cluster_utils import Cluster
+
+from lerobot_contrast.sweep import main
+
+SPEC = {
+    "eval": {"n_instances": 3, "max_episode_steps": 30, "rerun": False, "policy": {"type": "oracle"}},
+    "grid": {"seed": [0, 1, 2, 3]},
+}
+
+
+@pytest.mark.slow
+def test_cells_spread_over_the_nodes_of_a_cluster_and_their_results_are_gathered(tmp_path):
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
+    cluster.add_node(num_cpus=1)
+    try:
+        cluster.wait_for_nodes()
+        ray.init(address=cluster.address, log_to_driver=False)
+        path, out = tmp_path / "sweep.yaml", tmp_path / "out"
+        path.write_text(yaml.safe_dump(SPEC), encoding="utf-8")
+        assert main([str(path), f"--output_dir={out}", f"--ray.address={cluster.address}"]) == 0
+        cells = json.loads((out / "sweep.json").read_text())["cells"]
+        nodes = {node["NodeID"] for node in ray.nodes() if node["Alive"]}
+        assert len(nodes) == 2 and {cell["node"] for cell in cells} == nodes
+        results = pd.read_parquet(out / "results.parquet")
+        assert sorted(set(results["cell"])) == [f"seed={s}" for s in range(4)]
+        assert results.groupby("cell").size().to_dict() == {cell["name"]: cell["trials"] for cell in cells}
+    finally:
+        ray.shutdown()
+        cluster.shutdown()
