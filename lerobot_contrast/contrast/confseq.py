@@ -10,7 +10,8 @@ leading batch axis so that thousands of simulated studies update at once.
 
 A unit may carry a weight w in (0, 1]: with x the mean of a base's N trials and w = N / N_max, each factor
 1 + bet * w * (x - m) has conditional mean 1 when m = E[sum of trial values] / E[N], so the sequence covers the
-mean over trials (the ratio estimate the report shows), not the mean over bases.
+mean over trials (the ratio estimate the report shows), not the mean over bases. Bets are divided by the mean
+weight of the earlier units (a predictable scale, so the wealth stays a martingale) before truncation.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ class ConfidenceSequence:
         variance = self.squares / t  # sigma_hat^2_{t-1}: the (t-1) values seen so far plus the prior 1/4
         spread = t * np.log1p(t) if self.horizon is None else float(self.horizon)
         bet = np.sqrt(2.0 * math.log(2.0 / self.alpha) / (variance * spread))
+        bet /= (1.0 + self.weights) / t  # the bet on w (x - m): scaled by the mean weight so far (prior 1)
         w = np.broadcast_to(np.asarray(weight, dtype=np.float64), self.n.shape)[:, None]
         m = self.grid[None, :]
         with np.errstate(divide="ignore"):  # truncate, then weight: the factor stays linear in w

@@ -31,12 +31,14 @@ class StopError(UserError):
 @dataclass(frozen=True)
 class StopRule:
     """`width`: stop when the headline metric's anytime-valid interval is at most this wide. `reference`: the
-    headline value of each done trial (by plan index) of the run compared against. `alpha`: 1 - confidence."""
+    headline value of each done trial (by plan index) of the run compared against, in `metric`. `alpha`:
+    1 - confidence."""
 
     width: float | None = None
     alpha: float = 0.05
     reference: Mapping[int, float] | None = None
     reference_name: str = ""
+    metric: str | None = None  # the headline metric; None: the first done trial decides (see `headline_metric`)
 
     def __post_init__(self) -> None:
         if self.width is not None and not 0.0 < self.width < 1.0:
@@ -69,8 +71,8 @@ def headline_value(record: TrialRecord, metric: str) -> float | None:
 class Monitor:
     """The sequential state of one run: fed each record in trial order by `observe`, it says when to stop."""
 
-    def __init__(self, plan: list[PlannedTrial], rule: StopRule, metric: str | None = None) -> None:
-        self.rule, self.metric = rule, metric  # None: the first done trial decides (see `headline_metric`)
+    def __init__(self, plan: list[PlannedTrial], rule: StopRule) -> None:
+        self.rule, self.metric = rule, rule.metric
         self.last_index: dict[str, int] = {}
         for trial in plan:
             self.last_index[trial.base.id] = trial.index
@@ -85,14 +87,9 @@ class Monitor:
 
     def observe(self, record: TrialRecord) -> str | None:
         """Take one record; return why the run stops now, or None to go on."""
-        if self.metric is None and record.status == "done":
-            self.metric = headline_metric([record])
+        if record.status == "done":
+            self._check_metric(record)
         value = None if self.metric is None else headline_value(record, self.metric)
-        if self.metric == "spl" and record.status == "done" and value is None:
-            raise StopError(
-                f"--stop: trial {record.index} recorded no SPL, which this run's headline metric needs "
-                f"(the task gives no reference path); compare runs of a task that records SPL throughout"
-            )
         if value is not None:
             other = None if self.rule.reference is None else self.rule.reference.get(record.index)
             self.open.setdefault(record.base_id, []).append((value, other))
@@ -101,6 +98,19 @@ class Monitor:
         if self.reason is None:
             self.reason = self._verdict()
         return self.reason
+
+    def _check_metric(self, record: TrialRecord) -> None:
+        own = headline_metric([record])
+        if self.metric is None:
+            self.metric = own
+        elif own != self.metric:
+            source = (
+                f"{self.rule.reference_name}'s" if self.rule.reference is not None else "this run's earlier trials'"
+            )
+            raise StopError(
+                f"--stop: trial {record.index} has headline metric {own}, but {source} is {self.metric}; "
+                "compare runs of the same task and release"
+            )
 
     def _close(self, values: list[tuple[float, float | None]]) -> None:
         """A base is complete: its mean (and mean paired difference) joins the sequences as one unit."""
@@ -143,6 +153,13 @@ class Monitor:
         low, high = difference_bounds(self.difference)
         return float(low[0]), float(high[0])
 
+    def state(self) -> dict[str, Any]:
+        """What each trial's journal line records of the sequential test after it."""
+        out: dict[str, Any] = {"bases": self.bases, "anytime_interval": [self.low, self.high], "stop": self.reason}
+        if self.difference is not None:
+            out["difference_interval"] = list(self.bounds_difference())
+        return out
+
     def report(self, planned_end: bool) -> dict[str, Any]:
         """What the summary says: the rule, why the run stopped, and the anytime-valid intervals at that point."""
         out: dict[str, Any] = {
@@ -173,6 +190,18 @@ class Monitor:
             low, high = self.bounds_difference()
             text += f", diff vs {self.rule.reference_name} [{low:+.3f}, {high:+.3f}]"
         return text + f" ({self.bases} bases)"
+
+
+def summary_line(report: Mapping[str, Any]) -> str:
+    """The console's closing line on the sequential test, from `Monitor.report`."""
+    low, high = report["anytime_interval"]
+    level = f"{100 * (1 - report['alpha']):g}%"
+    text = f"sequential: {report['why']}; {report['metric']} anytime-valid {level} CS [{low:.3f}, {high:.3f}]"
+    text += f" over {report['complete_bases']} bases"
+    if "verdict" in report:
+        d_low, d_high = report["difference_interval"]
+        text += f"; vs {report['compare']}: {report['verdict']} (difference [{d_low:+.3f}, {d_high:+.3f}])"
+    return text
 
 
 def reason_text(reason: str, rule: StopRule) -> str:

@@ -91,5 +91,5 @@ def test_trials_without_a_value_do_not_count_and_missing_spl_is_refused():
     monitor.observe(record(plan[0], True, spl=0.9))
     monitor.observe(record(plan[1], False, status="not_applicable"))
     assert monitor.metric == "spl" and monitor.bases == 1
-    with pytest.raises(StopError, match="recorded no SPL"):
+    with pytest.raises(StopError, match="headline metric progress, but this run's earlier trials' is spl"):
         monitor.observe(record(plan[2], True, spl=None))
