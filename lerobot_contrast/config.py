@@ -14,6 +14,19 @@ from lerobot_contrast.policies.base import PolicyArgs
 
 
 @dataclass
+class StopArgs:
+    """Sequential stopping rules, checked after every trial (anytime-valid: stopping early keeps their level)."""
+
+    # Stop once the anytime-valid interval of the headline metric (SPL, else progress) is at most this wide.
+    width: float | None = None
+    # Stop once this run's paired difference from a finished run of the same plan is decided:
+    # a run directory or hub:USER/NAME (run with its --plan).
+    compare: str | None = None
+    # 1 - confidence of the anytime-valid intervals and of the comparison.
+    alpha: float = 0.05
+
+
+@dataclass
 class EvalConfig:
     """Contrast-set evaluation of a language-guided policy."""
 
@@ -78,6 +91,8 @@ class EvalConfig:
     resume: bool = False
     # Print the plan (trials, what to move before each, planned cost) and exit without running anything.
     dry_run: bool = False
+    # Stopping rules: --stop.width=0.1, --stop.compare=RUN_DIR|hub:USER/NAME, --stop.alpha=0.05.
+    stop: StopArgs = field(default_factory=StopArgs)
 
 
 class ConfigError(UserError):

@@ -24,6 +24,7 @@ from lerobot_contrast.build import (
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json, resume_args
 from lerobot_contrast.console import plan_lines
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.stopping import StopRule, summary_line
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.domains import load_task
@@ -31,6 +32,7 @@ from lerobot_contrast.evaluation import Evaluation, check_budget, preview, run
 from lerobot_contrast.flags import help_text, join_values, parse_config, robot_type, wants_help
 from lerobot_contrast.operator_console import OperatorConsole, SessionStopped
 from lerobot_contrast.policies import Policy, make_policy
+from lerobot_contrast.record.compare_run import compare_rule
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
 from lerobot_contrast.record.summary import format_summary
@@ -157,9 +159,18 @@ def planned_evaluation(cfg: EvalConfig) -> Evaluation:
     task, plan = build_plan(cfg)
     if source is not None:
         check_same_plan(source, plan)
-    planned = Evaluation(task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed)
+    planned = Evaluation(task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed, stop=stop_rule(cfg, plan))
     check_budget(planned)
     return planned
+
+
+def stop_rule(cfg: EvalConfig, plan: list[PlannedTrial]) -> StopRule | None:
+    """The --stop.* rules, or None without any; a width or alpha outside (0, 1), or a --stop.compare run whose
+    plan, task or metric differs, is refused in one line."""
+    if cfg.stop.compare is not None:
+        return compare_rule(cfg.stop.compare, plan, cfg.task, cfg.stop.width, cfg.stop.alpha)
+    rule = StopRule(cfg.stop.width, cfg.stop.alpha)
+    return rule if rule.active else None
 
 
 def equipped(
@@ -222,6 +233,8 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
         print(f"error: {error} with {resume}", file=sys.stderr)
         return 2
     print(format_summary(results.summary, unit))
+    if "stopping" in results.summary:
+        print(summary_line(results.summary["stopping"]))
     spent, ran = results.summary["overall"]["cumulative_cost"], len(results.records)
     if cfg.budget is not None and spent > cfg.budget:
         print(

@@ -29,7 +29,10 @@ def _group_stats(records: list[TrialRecord]) -> dict[str, Any]:
     }
 
 
-def summarize(records: Iterable[TrialRecord], *, settings: dict[str, Any], complete: bool) -> dict[str, Any]:
+def summarize(
+    records: Iterable[TrialRecord], *, settings: dict[str, Any], complete: bool, stopping: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """`stopping`: the sequential stopping rules' account of the run (why it stopped, its anytime-valid intervals)."""
     records = list(records)
     by_perturbation: dict[str, list[TrialRecord]] = defaultdict(list)
     by_family: dict[str, list[TrialRecord]] = defaultdict(list)
@@ -48,6 +51,7 @@ def summarize(records: Iterable[TrialRecord], *, settings: dict[str, Any], compl
         },
         "per_perturbation": {name: _group_stats(group) for name, group in by_perturbation.items()},
         "per_family": {name: _group_stats(group) for name, group in sorted(by_family.items())},
+        **({} if stopping is None else {"stopping": stopping}),
     }
 
 
