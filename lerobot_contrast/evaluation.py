@@ -19,16 +19,15 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.metrics import scored
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import Staged, materialize, trial_rng
-from lerobot_contrast.contrast.stopping import Monitor, StopRule
 from lerobot_contrast.contrast.strategy import PlannedTrial, exceeds_budget
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
 from lerobot_contrast.operator_console import OperatorConsole
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver
-from lerobot_contrast.record.plan_file import write_plan
+from lerobot_contrast.record.plan_file import keep_plan
 from lerobot_contrast.record.results import write_results
-from lerobot_contrast.record.run_dir import RunDir, open_run_dir
+from lerobot_contrast.record.run_dir import RunDir, disk_full_said, open_run_dir
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.runner import RobotRunner
@@ -68,7 +67,6 @@ class Evaluation:
     config: Mapping[str, Any] = field(default_factory=dict)  # written to config.json
     labels: Mapping[str, Any] = field(default_factory=dict)  # e.g. strategy and policy, for the summary and logs
     verbose: bool = False  # print a line per trial
-    stop: StopRule | None = None  # sequential stopping rules, checked after every trial
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -116,26 +114,43 @@ class LoopState:
 
 def run(evaluation: Evaluation) -> Results:
     """Run the plan (from where its journal stopped, with `resume`) and write the results and summary, also
-    when it is interrupted (then marked incomplete)."""
+    when it is interrupted (then marked incomplete). The run directory is locked while it runs."""
     ev = evaluation
-    run_dir = None if ev.output_dir is None else open_run_dir(Path(ev.output_dir), dict(ev.config), ev.resume)
+    if ev.output_dir is None:
+        return _run(ev, None)
+    path = Path(ev.output_dir)
+    with (
+        disk_full_said(path, f"resume with --output_dir={path} --resume=true"),
+        open_run_dir(path, dict(ev.config), ev.resume) as run_dir,
+    ):
+        _continue_from_journal(ev, run_dir)
+        return _run(ev, run_dir)
+
+
+def _continue_from_journal(ev: Evaluation, run_dir: RunDir) -> None:
+    """Check that the journal is this run's, then bring the plan file and the observers' files in line with it."""
+    journal = run_dir.journal
+    if journal.torn_bytes and ev.verbose:
+        print(f"{journal.path}: dropped its last line, cut off mid-write by a kill; that trial runs again")
+    journal.check_planned(replay(ev, journal.records), len(ev.plan))
+    keep_plan(run_dir.path, ev.plan)
+    for observer in ev.observers:
+        observer.rollback(journal.records)
+
+
+def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
     records: list[TrialRecord] = [] if run_dir is None else run_dir.journal.records
     state = LoopState.resume(records, ev.task.storage_scene())
-    if run_dir is not None:
-        write_plan(run_dir.path, ev.plan)
-        if records and ev.verbose:
-            spent = f"{state.cumulative_cost:.2f} {ev.cost_model.unit}"
-            print(f"resuming {run_dir.path} at trial {state.next_index} ({spent} spent)")
+    if records and ev.verbose:
+        print(
+            f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {ev.cost_model.unit} spent)"
+        )
     complete = False
-    monitor = None if ev.stop is None else Monitor(ev.plan, ev.stop)
-    for record in records if monitor is not None else ():  # the sequential test as the journal left it
-        monitor.observe(record)
     quiet = nullcontext() if run_dir is None else third_party_output(run_dir.path)
     with quiet:
         try:
             watching = ev.observers if ev.execute is None else ()  # observers watch the episodes a RobotRunner runs
-            executed = trials(ev, state, _executor(ev), watching)
-            for record in executed if monitor is None else _sequential(ev, monitor, executed):
+            for record in trials(ev, state, _executor(ev), watching):
                 if run_dir is None:
                     records.append(record)
                 else:
@@ -144,28 +159,44 @@ def run(evaluation: Evaluation) -> Results:
                     print(trial_line(record, ev.cost_model.unit), flush=True)
             complete = True
         finally:
-            stopping = None if monitor is None else monitor.report(planned_end=complete)
-            summary = summarize(records, settings=ev.settings, complete=complete, stopping=stopping)
-            if run_dir is not None:
-                _write(run_dir, records, summary, ev.settings)
-            for observer in ev.observers:
-                observer.close()
+            summary = summarize(records, settings=ev.settings, complete=complete)
+            try:
+                if run_dir is not None:
+                    _write(run_dir, records, summary, ev.settings)
+            finally:
+                for observer in ev.observers:
+                    observer.close()
     return Results(records, summary, None if run_dir is None else run_dir.path)
 
 
-def _sequential(ev: Evaluation, monitor: Monitor, executed: Iterator[TrialRecord]) -> Iterator[TrialRecord]:
-    """Check the stopping rules after every trial. Each record carries the sequential state it leaves in
-    extra["sequential"], so the journal holds it; the run ends after the trial that decides."""
-    if monitor.reason is not None:
-        return
-    for record in executed:
-        closed = monitor.bases
-        reason = monitor.observe(record)
-        yield dataclasses.replace(record, extra={**record.extra, "sequential": monitor.state()})
-        if ev.verbose and monitor.bases > closed:
-            print(f"{'':>7}{monitor.line()}", flush=True)
-        if reason is not None:
-            return
+def replay(evaluation: Evaluation, records: Sequence[TrialRecord]) -> list[TrialRecord]:
+    """The records the plan gives when each trial ends as `records` say it did: what the journal of this
+    evaluation must hold, up to timing and recordings."""
+    replayed: list[TrialRecord] = []
+    if not records:
+        return replayed
+    state = LoopState(evaluation.task.storage_scene())
+    for record in trials(evaluation, state, lambda context: _recorded(records[context.index], context)):
+        replayed.append(record)
+        if len(replayed) == len(records):
+            break
+    return replayed
+
+
+def _recorded(record: TrialRecord, context: TrialContext) -> Outcome:
+    """The outcome `record` was scored from."""
+    return Outcome(
+        success=bool(record.success),
+        steps=record.steps or 0,
+        path_length=record.path_length or 0.0,
+        scene_after=record.scene_after or context.current,
+        duration_s=record.duration_s or 0.0,
+        progress=record.progress,
+        reference_length=record.reference_length,
+        status=record.status,
+        cost=record.cost,
+        extra=record.extra,
+    )
 
 
 def _executor(ev: Evaluation) -> Execute:

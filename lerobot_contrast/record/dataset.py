@@ -12,6 +12,7 @@ import json
 import os
 import re
 import shutil
+from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -21,8 +22,8 @@ import numpy as np
 from lerobot.datasets import LeRobotDataset
 from lerobot.utils.feature_utils import build_dataset_frame, hw_to_dataset_features
 
-from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
+from lerobot_contrast.record.dataset_rollback import MOVE_ASIDE, DatasetError, roll_back
 from lerobot_contrast.record.observer import EpisodeFiles
 
 DATASET_DIR = "dataset"
@@ -49,10 +50,6 @@ def video_backend() -> str:
     except (ImportError, OSError, RuntimeError):
         return "pyav"
     return "torchcodec"
-
-
-class DatasetError(UserError):
-    pass
 
 
 def dataset_features(features: dict[str, dict], use_videos: bool) -> dict[str, dict]:
@@ -97,6 +94,10 @@ class DatasetRecorder:
         self._buffer: list[dict[str, Any]] = []
         self._buffered_bytes = 0
         self._frames = 0
+
+    def rollback(self, records: Sequence[TrialRecord]) -> None:
+        episodes = [r.dataset_episode for r in records if r.dataset_episode is not None]
+        roll_back(self.root, max(episodes, default=-1) + 1)
 
     def start(self, context: TrialContext, features: dict[str, dict], pose_keys: tuple[str, str] | None) -> None:
         wanted = dataset_features(features, self.use_videos)
@@ -211,10 +212,7 @@ class DatasetRecorder:
         info_path = self.root / "meta" / "info.json"
         if info_path.exists() and json.loads(info_path.read_text(encoding="utf-8")).get("total_episodes", 0) > 0:
             if not any((self.root / "meta" / "episodes").glob("*/*.parquet")):  # else LeRobot would ask the Hub
-                raise DatasetError(
-                    f"{self.root} is damaged (the run stopped while saving an episode); move it aside to record "
-                    "into a new dataset (the journal and the Rerun files are unaffected)"
-                )
+                raise DatasetError(f"{self.root} is damaged (the run stopped while saving an episode); {MOVE_ASIDE}")
             dataset = LeRobotDataset.resume(
                 self.repo_id, root=self.root, streaming_encoding=self.use_videos, video_backend=video_backend()
             )

@@ -22,6 +22,7 @@ from huggingface_hub.errors import (
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.record.card import dataset_card
+from lerobot_contrast.record.run_lock import RunLock
 
 HUB_PREFIX = "hub:"
 REQUIRED = ("config.json", "results.parquet", "summary.json")
@@ -144,6 +145,27 @@ def publish_run(
     leaves the repo exactly as publishing once."""
     run_dir = Path(run_dir)
     check_repo_id(repo_id)
+    run_files(run_dir)  # a folder that holds no run is refused before it is locked
+    try:  # a run another process is still writing is not published half-way
+        lock = RunLock.acquire(run_dir, f"publishing to {repo_id}")
+    except OSError as error:
+        raise HubError(f"{run_dir}: cannot lock the run to publish it ({error.strerror})") from None
+    try:
+        return _publish(run_dir, repo_id, private, token, endpoint, commit_message, attempts, backoff_s)
+    finally:
+        lock.release()
+
+
+def _publish(
+    run_dir: Path,
+    repo_id: str,
+    private: bool,
+    token: str | None,
+    endpoint: str | None,
+    commit_message: str | None,
+    attempts: int,
+    backoff_s: float,
+) -> str:
     files = run_files(run_dir)
     api = HfApi(endpoint=endpoint, token=token)
     card = dataset_card(run_dir, repo_id, api.endpoint, any(p.startswith("dataset/data/") for p in files))

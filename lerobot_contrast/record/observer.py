@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -17,12 +18,18 @@ class EpisodeFiles:
 
 
 class EpisodeObserver(Protocol):
-    """Watches episodes: `start`, then `step` once per control step, then exactly one of `end` or `discard`.
+    """Watches episodes: `rollback` once when recording into a run directory, then per episode `start`, then
+    `step` once per control step, then exactly one of `end` or `discard`.
 
     `features` are the robot's LeRobot features: {"observation": robot.observation_features,
     "action": robot.action_features}. Observations are the robot's flat dicts (floats, HxWxC uint8 images),
     actions the dicts sent to `send_action`. `pose_keys` names the observation keys holding the robot's
     (or effector's) planar x, y in the scene frame, when it reports them."""
+
+    def rollback(self, records: Sequence[TrialRecord]) -> None:
+        """Before the run goes on from its journal's `records`: remove what was written for any later trial (a run
+        killed after an episode was saved, before its journal line), so the files match the journal."""
+        ...
 
     def start(self, context: TrialContext, features: dict[str, dict], pose_keys: tuple[str, str] | None) -> None: ...
 
@@ -43,6 +50,9 @@ class EpisodeObserver(Protocol):
 
 class QuietObserver:
     """An observer that does nothing: subclass it to watch only what you need (timings, actions)."""
+
+    def rollback(self, records: Sequence[TrialRecord]) -> None:
+        pass
 
     def start(self, context: TrialContext, features: dict[str, dict], pose_keys: tuple[str, str] | None) -> None:
         pass

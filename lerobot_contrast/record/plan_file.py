@@ -30,6 +30,24 @@ def write_plan(run_dir: Path, plan: list[PlannedTrial]) -> None:
     write_json_atomic(run_dir / PLAN_FILE, plan_json(plan))
 
 
+def keep_plan(run_dir: Path, plan: list[PlannedTrial]) -> None:
+    """Write the plan of a run, or, where the run has written it already, refuse a plan that differs from it."""
+    path = run_dir / PLAN_FILE
+    if not path.exists():
+        write_plan(run_dir, plan)
+        return
+    todo = "restore config.json and plan.json as the run wrote them, or install the release the run was made with"
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        raise UserError(f"--resume: {path} is not readable JSON; {todo}") from None
+    if stored != json.loads(json.dumps(plan_json(plan))):
+        raise UserError(
+            f"--resume: {path} is not the plan config.json's settings give (one of them was edited, or this "
+            f"release plans differently); {todo}"
+        )
+
+
 def check_same_plan(source: Path, plan: list[PlannedTrial]) -> None:
     """Refuse to run when this release rebuilds a different plan from the published settings."""
     path = source / PLAN_FILE

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from io import BytesIO
@@ -98,6 +98,12 @@ class RerunEpisodeRecorder:
         self._encoder = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rerun-jpeg")
         self._episode: _Episode | None = None
 
+    def rollback(self, records: Sequence[TrialRecord]) -> None:
+        kept = {self.run_dir / r.rerun_path for r in records if r.rerun_path is not None}
+        for path in self.directory.glob("episode_*.rrd*"):  # also .partial: an episode cut off while saved
+            if path not in kept:
+                path.unlink()
+
     def start(self, context: TrialContext, features: dict[str, dict], pose_keys: tuple[str, str] | None) -> None:
         observation = features["observation"]
         cameras = camera_keys(observation)
@@ -126,11 +132,14 @@ class RerunEpisodeRecorder:
         self.directory.mkdir(parents=True, exist_ok=True)
         bounds = MapBounds.around(context, episode.poses, record.scene_after, self.task)
         recording = rr.RecordingStream(APPLICATION_ID, recording_id=f"{self.run_name}-trial{context.index:06d}")
-        recording.save(partial, default_blueprint=rrb.Blueprint(episode_views(episode.cameras, bounds)))
-        self._log_episode(recording, episode, record, bounds)
-        recording.flush(timeout_sec=FLUSH_TIMEOUT_S)
-        recording.disconnect()  # writes the footer; only then is the file complete
-        os.replace(partial, path)
+        try:
+            recording.save(partial, default_blueprint=rrb.Blueprint(episode_views(episode.cameras, bounds)))
+            self._log_episode(recording, episode, record, bounds)
+            recording.flush(timeout_sec=FLUSH_TIMEOUT_S)
+            recording.disconnect()  # writes the footer; only then is the file complete
+            os.replace(partial, path)
+        finally:
+            partial.unlink(missing_ok=True)
         self._write_layout(episode.cameras)
         return EpisodeFiles(rerun_path=path.relative_to(self.run_dir).as_posix())
 

@@ -59,8 +59,11 @@ def write_results(path: Path, records: Iterable[TrialRecord], metadata: dict[str
     meta = {"lerobot_contrast.results_version": str(RESULTS_VERSION), **metadata}
     table = table.replace_schema_metadata({k.encode(): v.encode() for k, v in meta.items()})
     tmp = path.with_suffix(".parquet.tmp")
-    pq.write_table(table, tmp)
-    os.replace(tmp, path)
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 def read_results(path: Path) -> pa.Table:

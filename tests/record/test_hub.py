@@ -15,6 +15,7 @@ from lerobot.datasets import LeRobotDataset
 
 from lerobot_contrast import publish
 from lerobot_contrast.record.hub import HubAuthError, HubError, download_run, publish_run, resolve_run, run_files
+from lerobot_contrast.record.run_lock import RunLock, RunLockedError
 
 REPO = "tester/lt-contrast"
 # huggingface_hub passes raw bytes as `data=`, which httpx deprecates; not ours to fix.
@@ -130,6 +131,16 @@ def test_bad_input_is_refused_before_any_request(hub, run, tmp_path, capsys):
     assert publish.main([str(run)]) == 2
     assert "the following arguments are required: --repo_id" in capsys.readouterr().err
     assert hub.requests == []
+
+
+def test_a_run_another_process_is_writing_is_not_published(hub, run):
+    lock = RunLock.acquire(run, "an evaluation")
+    try:
+        with pytest.raises(RunLockedError, match=rf"is in use by process {os.getpid()} \(an evaluation, since "):
+            publish_run(run, REPO + "-locked", endpoint=hub.endpoint)
+    finally:
+        lock.release()
+    assert ("dataset", REPO + "-locked") not in hub.repos
 
 
 def test_download_fetches_the_results_or_the_whole_run(hub, run, tmp_path):

@@ -1,3 +1,4 @@
+import errno
 import json
 import os
 import signal
@@ -65,7 +66,7 @@ def test_a_torn_last_line_from_a_killed_run_is_dropped_and_the_file_repaired(tmp
     complete = path.read_bytes()
     path.write_bytes(complete + json.dumps({"version": 1, **record(1).to_json()}).encode()[:57])
     again = Journal.open(path)
-    assert again.records == [record(0)]
+    assert again.records == [record(0)] and again.torn_bytes == 57
     assert path.read_bytes() == complete
     again.append(record(1))
     assert Journal.open(path).records == [record(0), record(1)]
@@ -104,15 +105,16 @@ def test_records_must_arrive_in_plan_order(tmp_path):
 
 def test_an_existing_run_is_not_overwritten_without_resume(tmp_path):
     run = tmp_path / "run"
-    open_run_dir(run, {"seed": 0}, resume=False)
+    open_run_dir(run, {"seed": 0}, resume=False).close()
     with pytest.raises(RunDirError, match="already exists; pass --resume=true"):
         open_run_dir(run, {"seed": 0}, resume=False)
-    assert open_run_dir(run, {"seed": 0, "resume": True}, resume=True).path == run
+    with open_run_dir(run, {"seed": 0, "resume": True}, resume=True) as resumed:
+        assert resumed.path == run
 
 
 def test_resume_refuses_changed_settings_and_missing_runs(tmp_path):
     run = tmp_path / "run"
-    open_run_dir(run, {"seed": 0, "budget": 5.0}, resume=False)
+    open_run_dir(run, {"seed": 0, "budget": 5.0}, resume=False).close()
     with pytest.raises(RunDirError, match=r"other settings, --budget=9.0 \(was 5.0\); drop those flags"):
         open_run_dir(run, {"seed": 0, "budget": 9.0}, resume=True)
     with pytest.raises(RunDirError, match="holds no run to resume"):
@@ -124,3 +126,59 @@ def test_an_unwritable_output_dir_names_the_flag(tmp_path):
     blocker.write_text("")
     with pytest.raises(RunDirError, match=r"--output_dir: cannot write to .*a_file/run \(Not a directory\)"):
         open_run_dir(blocker / "run", {"seed": 0}, resume=False)
+
+
+def line(trial, **changes):
+    return json.dumps({"version": 1, **record(trial).to_json(), **changes})
+
+
+MALFORMED = {
+    "a duplicated line": ([line(0), line(1), line(1), line(2)], "line 3 holds trial 1, expected trial 2"),
+    "a deleted middle line": ([line(0), line(2)], "line 2 holds trial 2, expected trial 1"),
+    "an empty line": ([line(0), "", line(1)], "line 2 is not valid JSON"),
+    "a line that is not an object": ([line(0), "[1, 2]"], "line 2 is not a trial record"),
+    "a string index": ([line(0), line(1, index="1")], r"line 2 is not a valid trial record \(field index\)"),
+    "a missing field": ([line(0, base_id=None)], r"line 1 is not a valid trial record \(field base_id\)"),
+    "an unknown status": ([line(0, status="won")], r"\(field status\)"),
+    "a broken instance": ([line(0, instance={"id": "x"})], r"\(instance or scene_after\)"),
+    "a negative index": ([line(0, index=-1)], r"\(field index\)"),
+}
+
+
+@pytest.mark.parametrize("case", MALFORMED)
+def test_a_malformed_journal_is_refused_naming_the_line_and_left_as_it_was(tmp_path, case):
+    lines, message = MALFORMED[case]
+    path = tmp_path / "journal.jsonl"
+    path.write_text("".join(text + "\n" for text in lines))
+    before = path.read_bytes()
+    with pytest.raises(JournalError, match=message) as refused:
+        Journal.open(path)
+    assert "\n" not in str(refused.value) and "restore journal.jsonl from a backup" in str(refused.value)
+    assert path.read_bytes() == before
+
+
+def test_a_journal_that_is_a_directory_is_one_line(tmp_path):
+    (tmp_path / "journal.jsonl").mkdir()
+    with pytest.raises(JournalError, match=r"cannot read the journal \(Is a directory\)"):
+        Journal.open(tmp_path / "journal.jsonl")
+
+
+def test_a_full_disk_during_an_append_leaves_no_partial_line(tmp_path, monkeypatch):
+    path = tmp_path / "journal.jsonl"
+    journal = Journal.open(path)
+    journal.append(record(0))
+    before = path.read_bytes()
+    real_write = os.write
+
+    def half_then_full(fd, data):
+        if len(data) > 20:
+            return real_write(fd, data[:20])
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "write", half_then_full)
+    with pytest.raises(OSError, match="No space left"):
+        journal.append(record(1))
+    monkeypatch.undo()
+    assert path.read_bytes() == before and journal.records == [record(0)]
+    journal.append(record(1))
+    assert Journal.open(path).records == [record(0), record(1)]

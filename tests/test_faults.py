@@ -1,0 +1,172 @@
+"""Fault injection end to end: `python -m lerobot_contrast.eval` SIGKILLed at chosen moments and resumed, two
+writers on one run directory, and a full disk. Under every fault nothing is lost or duplicated, and the resumed run
+equals an uninterrupted one, its LeRobotDataset and Rerun files included."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+from lerobot.datasets import LeRobotDataset
+
+ARGS = ["--n_instances=5", "--seed=3", "--policy.type=oracle", "--record_dataset=true"]
+VARYING = ("duration_s", "started_at", "wall_time_s")  # the clock's, not the run's
+# Runs eval's main with one moment patched to SIGKILL the process: test-side only, the product has no such hook.
+KILLER = """
+import json, os, signal, sys, time
+from pathlib import Path
+import lerobot.datasets.dataset_metadata as metadata
+import lerobot_contrast.record.journal as journal
+import pyarrow.parquet as pq
+from lerobot_contrast.eval import main
+from lerobot_contrast.record.dataset import DatasetRecorder
+
+moment, at = sys.argv[1], int(sys.argv[2])
+
+def kill():
+    os.kill(os.getpid(), signal.SIGKILL)
+
+def hold():  # say so, then wait for the test to let the run go on
+    marker = Path(os.environ["FAULT_MARKER"])
+    marker.touch()
+    while marker.exists():
+        time.sleep(0.05)
+
+def after(owner, name, strikes, then=kill):
+    real = getattr(owner, name)
+    def patched(*args, **kwargs):
+        result = real(*args, **kwargs)
+        if strikes(args, result):
+            then()
+        return result
+    setattr(owner, name, patched)
+
+def torn(path, data, real=journal._append_line):
+    if json.loads(data)["index"] != at:
+        return real(path, data)
+    real(path, data[: len(data) // 2])
+    kill()
+
+if moment == "dataset_counted":  # info.json counts the episode; its metadata and journal line are not written
+    after(metadata, "write_info", lambda args, _: args[0].total_episodes == at)
+elif moment == "episode_saved":  # the episode is finalized; its trial's journal line is not written
+    after(DatasetRecorder, "end", lambda args, files: files.dataset_episode == at)
+elif moment == "journal_appended":
+    after(journal.Journal, "append", lambda args, _: args[1].index == at)
+elif moment == "journal_torn":  # half a line reaches the disk
+    journal._append_line = torn
+elif moment == "final_write":  # results.parquet is being written after the last trial
+    after(pq, "write_table", lambda args, _: str(args[1]).endswith("results.parquet.tmp"))
+elif moment == "hold_after_append":
+    after(journal.Journal, "append", lambda args, _: args[1].index == at, then=hold)
+sys.exit(main(sys.argv[3:]))
+"""
+
+
+def cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "lerobot_contrast.eval", *args], capture_output=True, text=True, timeout=300
+    )
+
+
+def killed_at(moment: str, at: int, *args: str) -> subprocess.CompletedProcess:
+    command = [sys.executable, "-c", KILLER, moment, str(at), *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=300)
+
+
+def journal(run: Path) -> list[dict]:
+    lines = (run / "journal.jsonl").read_text().splitlines()
+    return [{k: v for k, v in json.loads(line).items() if k not in VARYING} for line in lines]
+
+
+def results(run: Path) -> list[dict]:
+    return [
+        {k: v for k, v in row.items() if k not in VARYING} for row in pq.read_table(run / "results.parquet").to_pylist()
+    ]
+
+
+def summary(run: Path) -> dict:
+    data = json.loads((run / "summary.json").read_text())
+    data["overall"].pop("wall_time_s")
+    return data
+
+
+def frames(run: Path) -> list[dict]:
+    """Every frame of the run's dataset, without its images (the same frames encode to the same columns)."""
+    dataset = LeRobotDataset("local/run", root=run / "dataset")
+    columns = [name for name in dataset.hf_dataset.column_names if name not in dataset.meta.video_keys]
+    return dataset.hf_dataset.select_columns(columns).to_list()
+
+
+def leftovers(run: Path) -> list[str]:
+    return sorted(p.name for p in run.rglob("*") if p.name.endswith((".tmp", ".partial")))
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> Path:
+    run = tmp_path_factory.mktemp("reference") / "run"
+    result = cli(*ARGS, f"--output_dir={run}")
+    assert result.returncode == 0, result.stderr
+    return run
+
+
+def assert_same_run(run: Path, reference: Path) -> None:
+    """Nothing lost, nothing duplicated, and the same results, dataset and Rerun files as the uninterrupted run."""
+    assert journal(run) == journal(reference)
+    assert results(run) == results(reference) and summary(run) == summary(reference)
+    assert frames(run) == frames(reference)
+    rrd = sorted(p.name for p in (run / "rerun").iterdir())
+    assert rrd == sorted(p.name for p in (reference / "rerun").iterdir())
+    assert leftovers(run) == []
+
+
+KILLS = {
+    "the first episode counted in info.json": [("dataset_counted", 1)],
+    "three later episodes counted in info.json": [
+        ("dataset_counted", 3),
+        ("dataset_counted", 6),
+        ("dataset_counted", 9),
+    ],
+    "an episode saved, its trial not journaled": [("episode_saved", 2)],
+    "a journal line appended, then one torn": [("journal_appended", 4), ("journal_torn", 20)],
+    "the final write of results.parquet": [("final_write", 0)],
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", KILLS)
+def test_a_run_killed_at_any_moment_resumes_to_the_uninterrupted_run(tmp_path, reference, case):
+    run, resume = tmp_path / "run", ()
+    for moment, at in KILLS[case]:
+        killed = killed_at(moment, at, *ARGS, f"--output_dir={run}", *resume)
+        assert killed.returncode == -9, killed.stderr[-3000:]
+        resume = ("--resume=true",)
+    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
+    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    assert_same_run(run, reference)
+    if ("journal_torn", 20) in KILLS[case]:
+        assert "dropped its last line, cut off mid-write by a kill; that trial runs again" in resumed.stdout
+
+
+@pytest.mark.slow
+def test_a_second_writer_is_refused_naming_the_first(tmp_path, reference, monkeypatch):
+    run, marker = tmp_path / "run", tmp_path / "holding"
+    assert killed_at("journal_appended", 10, *ARGS, f"--output_dir={run}").returncode == -9
+    monkeypatch.setenv("FAULT_MARKER", str(marker))
+    command = [sys.executable, "-c", KILLER, "hold_after_append", "20", *ARGS, f"--output_dir={run}", "--resume=true"]
+    first = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not marker.exists() and first.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    second = cli(*ARGS, f"--output_dir={run}", "--resume=true")
+    marker.unlink()
+    _, stderr = first.communicate(timeout=300)
+    assert second.returncode == 2 and second.stderr.count("\n") == 1, second.stderr
+    assert f"is in use by process {first.pid} (an evaluation, since " in second.stderr
+    assert first.returncode == 0, stderr[-3000:]
+    assert_same_run(run, reference)
