@@ -104,3 +104,14 @@ def test_a_width_or_alpha_outside_zero_to_one_is_one_line(flag, capsys, tmp_path
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and flag.split("=")[0] in err and "between 0 and 1" in err
     assert not (tmp_path / "run").exists()
+
+
+def test_report_shows_the_anytime_valid_interval_beside_the_fixed_n_one(tmp_path):
+    from lerobot_contrast.reporting import load_run
+    from lerobot_contrast.reporting.build import build_report
+
+    evaluate(tmp_path / "run", StopArgs(width=0.6), mostly)
+    text = build_report([load_run(str(tmp_path / "run"))], tmp_path / "report").path.read_text()
+    section = text.split("## Sequential stopping", 1)[1].split("\n## ", 1)[0]
+    assert "| fixed-n interval | anytime-valid CS |" in section and "at most 0.6 wide" in section
+    assert "valid only for a number of bases fixed in advance" in section

@@ -133,6 +133,36 @@ def settings_section(runs: list[Run]) -> list[str]:
     return lines + [""]
 
 
+def sequential_section(runs: list[Run]) -> list[str]:
+    """Runs with --stop.* rules: why each stopped, and its anytime-valid interval beside the fixed-n one."""
+    rows = []
+    for run in runs:
+        s = run.summary.get("stopping")
+        if not s:
+            continue
+        level = f"{100 * (1 - s['alpha']):g}%"
+        fixed, anytime = s["fixed_n_interval"], s["anytime_interval"]
+        mean = "-" if s["mean"] is None else num(s["mean"])
+        verdict = "-"
+        if "verdict" in s:
+            low, high = s["difference_interval"]
+            verdict = f"{s['verdict']} than {s['compare']} [{num(low)}, {num(high)}]"
+        rows.append(
+            [run.name, s["why"], str(s["complete_bases"]), f"{s['metric']} {mean}",
+             f"[{num(fixed[0])}, {num(fixed[1])}] ({level})", f"[{num(anytime[0])}, {num(anytime[1])}] ({level})",
+             verdict]
+        )  # fmt: skip
+    if not rows:
+        return []
+    header = ["run", "stopped because", "bases", "mean", "fixed-n interval", "anytime-valid CS", "comparison"]
+    note = (
+        "The fixed-n interval is valid only for a number of bases fixed in advance; after stopping on the data, "
+        "read the anytime-valid confidence sequence (betting, Waudby-Smith and Ramdas 2024), which holds at any "
+        "stopping time. Both cover the mean over trials of the bases completed when the run stopped."
+    )
+    return ["## Sequential stopping", "", *table(header, rows), "", note, ""]
+
+
 def notes_section(runs: list[Run]) -> list[str]:
     notes = []
     for run in runs:
