@@ -154,6 +154,11 @@ def main(argv: list[str] | None = None) -> int:
             print("\n".join(lines + _flag_lines(SweepConfig, "")))
             return 0
         return run_sweep(parse_config(SweepConfig, argv), console)
+    except KeyboardInterrupt:
+        print(
+            "\ninterrupted: every finished trial is in its cell's journal; continue with --resume=true", file=sys.stderr
+        )
+        return 130
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -6,7 +6,7 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import ray
@@ -28,16 +28,10 @@ class RayArgs:
     num_cpus: int | None = None
 
 
-@dataclass
-class Watch:
-    """Trial counts of the running cells, read from their journals (on the driver's file system, shared with
-    the workers), for the progress bar."""
-
-    planned: dict[str, int]
-    finished: dict[str, int] = field(default_factory=dict)
-
-    def trials(self, cells: Sequence[Cell]) -> int:
-        return sum(self.finished.get(c.name, _journal_lines(Path(c.config.output_dir))) for c in cells)
+def trials_recorded(cells: Sequence[Cell], finished: dict[str, int]) -> int:
+    """Trials so far: a finished cell's count, else its journal's lines (on the driver's file system, which the
+    workers share)."""
+    return sum(finished.get(c.name, _journal_lines(Path(c.config.output_dir))) for c in cells)
 
 
 def _journal_lines(run_dir: Path) -> int:
@@ -72,7 +66,8 @@ def run_cells(
         ).remote(cell.name, cell.config): cell
         for cell in cells
     }
-    watch, outcomes = Watch(planned), {}
+    finished: dict[str, int] = {}  # complete cells count as their whole plan (a budget may stop one earlier)
+    outcomes = {}
     with _progress(console) as progress:
         cell_bar = progress.add_task("cells", total=len(cells))
         trial_bar = progress.add_task("trials", total=sum(planned.values()))
@@ -82,10 +77,11 @@ def run_cells(
             for ref in ready:
                 outcome = _outcome(refs[ref], ref, max_retries)
                 outcomes[outcome.name] = outcome
-                watch.finished[outcome.name] = planned[outcome.name] if outcome.status == "complete" else 0
+                if outcome.status == "complete":
+                    finished[outcome.name] = planned[outcome.name]
                 report(outcome)
             progress.update(cell_bar, completed=len(outcomes))
-            progress.update(trial_bar, completed=watch.trials(cells))
+            progress.update(trial_bar, completed=trials_recorded(cells, finished))
     return [outcomes[cell.name] for cell in cells]
 
 
