@@ -19,6 +19,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.metrics import scored
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import Staged, materialize, trial_rng
+from lerobot_contrast.contrast.stopping import Monitor, StopRule
 from lerobot_contrast.contrast.strategy import PlannedTrial, exceeds_budget
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
@@ -67,6 +68,7 @@ class Evaluation:
     config: Mapping[str, Any] = field(default_factory=dict)  # written to config.json
     labels: Mapping[str, Any] = field(default_factory=dict)  # e.g. strategy and policy, for the summary and logs
     verbose: bool = False  # print a line per trial
+    stop: StopRule | None = None  # sequential stopping rules, checked after every trial
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -146,11 +148,15 @@ def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
             f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {ev.cost_model.unit} spent)"
         )
     complete = False
+    monitor = None if ev.stop is None else Monitor(ev.plan, ev.stop)
+    for record in records if monitor is not None else ():  # the sequential test as the journal left it
+        monitor.observe(record)
     quiet = nullcontext() if run_dir is None else third_party_output(run_dir.path)
     with quiet:
         try:
             watching = ev.observers if ev.execute is None else ()  # observers watch the episodes a RobotRunner runs
-            for record in trials(ev, state, _executor(ev), watching):
+            executed = trials(ev, state, _executor(ev), watching)
+            for record in executed if monitor is None else _sequential(ev, monitor, executed):
                 if run_dir is None:
                     records.append(record)
                 else:
@@ -159,7 +165,8 @@ def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
                     print(trial_line(record, ev.cost_model.unit), flush=True)
             complete = True
         finally:
-            summary = summarize(records, settings=ev.settings, complete=complete)
+            stopping = None if monitor is None else monitor.report(planned_end=complete)
+            summary = summarize(records, settings=ev.settings, complete=complete, stopping=stopping)
             try:
                 if run_dir is not None:
                     _write(run_dir, records, summary, ev.settings)
@@ -167,6 +174,21 @@ def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
                 for observer in ev.observers:
                     observer.close()
     return Results(records, summary, None if run_dir is None else run_dir.path)
+
+
+def _sequential(ev: Evaluation, monitor: Monitor, executed: Iterator[TrialRecord]) -> Iterator[TrialRecord]:
+    """Check the stopping rules after every trial. Each record carries the sequential state it leaves in
+    extra["sequential"], so the journal holds it; the run ends after the trial that decides."""
+    if monitor.reason is not None:
+        return
+    for record in executed:
+        closed = monitor.bases
+        reason = monitor.observe(record)
+        yield dataclasses.replace(record, extra={**record.extra, "sequential": monitor.state()})
+        if ev.verbose and monitor.bases > closed:
+            print(f"{'':>7}{monitor.line()}", flush=True)
+        if reason is not None:
+            return
 
 
 def replay(evaluation: Evaluation, records: Sequence[TrialRecord]) -> list[TrialRecord]:
