@@ -108,7 +108,8 @@ def build_plan(cfg: EvalConfig) -> tuple[Task, list[PlannedTrial]]:
         )
     rng = np.random.default_rng(cfg.seed)
     instances = task.sample(n_instances, rng)
-    return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order)
+    cost = task.cost_model(cfg.cost)  # cost_aware order prices staging in the run's own cost model
+    return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order, cost)
 
 
 def default_output_dir(cfg: EvalConfig, task: Task) -> Path:

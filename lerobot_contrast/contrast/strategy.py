@@ -96,7 +96,9 @@ def make_plan(
     repeats: int,
     rng: np.random.Generator,
     order: str = "iid",
+    cost: CostModel | None = None,
 ) -> list[PlannedTrial]:
+    """The planned trials of `strategy`; `cost` (the run's cost model; default: distance) prices cost_aware order."""
     try:
         planner = STRATEGIES[strategy]
     except KeyError:
@@ -104,7 +106,7 @@ def make_plan(
     if order not in ORDERS:
         raise UserError(f"--order: unknown order {order!r}; choose from: {', '.join(ORDERS)}")
     plan = planner(instances, perturbations, repeats, rng)
-    return reorder_plan(plan) if order == "cost_aware" else plan
+    return reorder_plan(plan, cost) if order == "cost_aware" else plan
 
 
 def reorder_plan(plan: list[PlannedTrial], cost: CostModel | None = None) -> list[PlannedTrial]:

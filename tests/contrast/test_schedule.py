@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from lerobot_contrast import Evaluation, preview
-from lerobot_contrast.contrast.cost import DistanceCost
+from lerobot_contrast.contrast.cost import DistanceCost, ResetTimeCost
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.schedule import nearest_neighbour, path_cost, two_opt
 from lerobot_contrast.contrast.strategy import make_plan
@@ -40,6 +40,22 @@ def test_cost_aware_order_stages_the_same_trials_for_much_less(language_table, s
     assert trial_keys(cheap) == trial_keys(iid)
     assert [t.index for t in cheap] == list(range(len(iid)))
     assert planned_cost(task, cheap) < 0.8 * planned_cost(task, iid)
+
+
+def test_cost_aware_order_prices_staging_with_the_runs_cost_model(language_table):
+    """Under reset time, handling each moved object (3 s) outweighs the distance, so the tour changes and is
+    cheaper in seconds than the tour that minimises metres."""
+    task, instances = language_table
+    perturbations = task.perturbations.select(PERTURBATIONS)
+    by_distance = make_plan("contrast", instances, perturbations, 1, np.random.default_rng(3), "cost_aware")
+    seconds = ResetTimeCost()
+    by_time = make_plan("contrast", instances, perturbations, 1, np.random.default_rng(3), "cost_aware", seconds)
+    assert trial_keys(by_time) == trial_keys(by_distance) and by_time != by_distance
+
+    def reset_seconds(trials):
+        return preview(Evaluation(task, trials, seconds, seed=3))[-1].cumulative_cost
+
+    assert reset_seconds(by_time) < reset_seconds(by_distance)
 
 
 def test_each_base_keeps_its_chain_of_perturbations_behind_it(language_table):
