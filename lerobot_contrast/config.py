@@ -42,7 +42,8 @@ class EvalConfig:
     # Perturbations the contrast strategy applies after each base instance, in order (default: all of the
     # task's), e.g. LB1,LB2,SB1,SB2.
     perturbations: list[str] | None = None
-    # Order in which base instances are visited: iid (as sampled) or cost_aware (same bases, cheaper to stage).
+    # Order in which base instances are visited: iid (as sampled), cost_aware (same bases, cheaper to stage), or
+    # adaptive (bases as sampled; after each trial, the perturbation with most information per staging cost).
     order: str = "iid"
     # Number of i.i.d. base instances in the evaluation set (default: the task's own, 50 for Language-Table,
     # the 5 shipped arrangements for VLN).
@@ -89,6 +90,9 @@ class EvalConfig:
     output_dir: Path | None = None
     # Continue the run in --output_dir where it stopped.
     resume: bool = False
+    # With --resume: run again the last trials that a lost robot aborted (false: keep them as aborted and go on
+    # after them, e.g. for a trial that loses the robot every time).
+    rerun_aborted: bool = True
     # Print the plan (trials, what to move before each, planned cost) and exit without running anything.
     dry_run: bool = False
     # Stopping rules: --stop.width=0.1, --stop.compare=RUN_DIR|hub:USER/NAME, --stop.alpha=0.05.
@@ -108,5 +112,9 @@ def resume_args(argv: list[str]) -> list[str]:
     return [f"--config_path={stored}", *argv] if "output_dir" in flags and stored.is_file() else argv
 
 
+# Choices of one session that a resumed run may make differently, so they are not stored in config.json.
+SESSION_CHOICES = ("rerun_aborted",)
+
+
 def config_json(config: Any) -> dict[str, Any]:
-    return draccus.encode(config)
+    return {k: v for k, v in draccus.encode(config).items() if k not in SESSION_CHOICES}

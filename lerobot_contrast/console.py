@@ -7,11 +7,22 @@ from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.trial import TrialRecord
 
+# How an aborted episode ended (`extra["ended_by"]`), as the console says it.
+ABORTED_BY = {"disconnected": "the robot disconnected", "estop": "emergency stop"}
+
 
 def trial_line(record: TrialRecord, unit: str) -> str:
     head = f"[{record.index:>4}] {label(record.perturbation):<9}"
-    if record.status != "done" or record.instance is None:
+    if record.status == "not_applicable" or record.instance is None:
         return f"{head} not applicable here, skipped"
+    if record.status == "skipped":
+        return f"{head} skipped by the operator"
+    if record.status == "aborted":
+        ended_by = record.extra.get("ended_by")
+        return (
+            f"{head} aborted: {ABORTED_BY.get(ended_by, ended_by)} after {record.steps} steps; "
+            f"cost={record.cost:.2f} {unit} total={record.cumulative_cost:.2f} {unit}  {record.instance.instruction!r}"
+        )
     metric = f"success={int(bool(record.success))}"
     if record.spl is not None:
         metric += f" spl={record.spl:.2f}"

@@ -160,7 +160,10 @@ def planned_evaluation(cfg: EvalConfig) -> Evaluation:
     task, plan = build_plan(cfg)
     if source is not None:
         check_same_plan(source, plan)
-    planned = Evaluation(task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed, stop=stop_rule(cfg, plan))
+    planned = Evaluation(
+        task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed, stop=stop_rule(cfg, plan),
+        adaptive=cfg.order == "adaptive",
+    )  # fmt: skip
     check_budget(planned)
     return planned
 
@@ -189,6 +192,7 @@ def equipped(
         max_episode_s=cfg.max_episode_s,
         output_dir=cfg.output_dir,
         resume=cfg.resume,
+        rerun_aborted=cfg.rerun_aborted,
         config=config_json(cfg),
         labels={"strategy": cfg.strategy, "policy": cfg.policy.label},
         verbose=True,

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from lerobot_contrast.console import trial_line
+from lerobot_contrast.contrast.adaptive import next_trial
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.metrics import scored
@@ -25,6 +26,7 @@ from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
 from lerobot_contrast.operator_console import OperatorConsole
 from lerobot_contrast.policies.base import Policy
+from lerobot_contrast.record.lost_trials import drop_lost_trials
 from lerobot_contrast.record.observer import EpisodeObserver
 from lerobot_contrast.record.plan_file import keep_plan
 from lerobot_contrast.record.results import write_results
@@ -65,10 +67,12 @@ class Evaluation:
     execute: Execute | None = None
     output_dir: Path | None = None
     resume: bool = False  # continue the run in `output_dir` from its journal
+    rerun_aborted: bool = True  # on resume, run again the last trials a lost robot aborted (False: keep them)
     config: Mapping[str, Any] = field(default_factory=dict)  # written to config.json
     labels: Mapping[str, Any] = field(default_factory=dict)  # e.g. strategy and policy, for the summary and logs
     verbose: bool = False  # print a line per trial
     stop: StopRule | None = None  # sequential stopping rules, checked after every trial
+    adaptive: bool = False  # --order=adaptive: each next trial is chosen from the outcomes so far (adaptive.py)
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -102,10 +106,11 @@ class LoopState:
     cumulative_cost: float = 0.0
     previous: Staged | None = None
     next_index: int = 0
+    history: list[TrialRecord] = field(default_factory=list)  # the records so far, for --order=adaptive
 
     @classmethod
     def resume(cls, records: list[TrialRecord], initial_scene: Scene) -> LoopState:
-        state = cls(scene=initial_scene, next_index=len(records))
+        state = cls(scene=initial_scene, next_index=len(records), history=list(records))
         for record in records:
             state.previous = Staged(record.instance, record.staging)
             if record.status in STAGED and record.scene_after is not None:
@@ -135,6 +140,8 @@ def _continue_from_journal(ev: Evaluation, run_dir: RunDir) -> None:
     if journal.torn_bytes and ev.verbose:
         print(f"{journal.path}: dropped its last line, cut off mid-write by a kill; that trial runs again")
     journal.check_planned(replay(ev, journal.records), len(ev.plan))
+    if ev.rerun_aborted:
+        drop_lost_trials(journal, _say if ev.verbose else None)
     keep_plan(run_dir.path, ev.plan)
     for observer in ev.observers:
         observer.rollback(journal.records)
@@ -236,7 +243,12 @@ def _executor(ev: Evaluation) -> Execute:
         max_episode_s=ev.max_episode_s,
         observers=ev.observers,
         cost_unit=ev.cost_model.unit,
+        say=_say if ev.verbose else None,
     )
+
+
+def _say(line: str) -> None:
+    print(line, flush=True)
 
 
 def _write(run_dir: RunDir, records: list[TrialRecord], summary: dict[str, Any], settings: dict[str, Any]) -> None:
@@ -276,7 +288,7 @@ def trials(
     `observers` (those watching the episodes `execute` runs) receive each record and name their files in it."""
     ev = evaluation
     settings = ev.settings
-    for trial in ev.plan[state.next_index :]:
+    for trial in _upcoming(ev, state):
         if exceeds_budget(state.cumulative_cost, ev.budget):
             return
         staged = materialize(trial, ev.task, state.scene, state.previous, trial_rng(ev.seed, trial.index))
@@ -307,7 +319,23 @@ def trials(
         else:  # skipped: nothing was staged, so the next trial starts where this one would have
             cost = 0.0
         record = scored(context, outcome, cost, state.cumulative_cost, started_at)
+        state.history.append(record)
         yield _observed(record, observers) if outcome.status in STAGED else record
+
+
+def _upcoming(ev: Evaluation, state: LoopState) -> Iterator[PlannedTrial]:
+    """The plan from `state.next_index`; with adaptive order, each next trial as the outcomes so far choose it."""
+    if not ev.adaptive:
+        yield from ev.plan[state.next_index :]
+        return
+    while (trial := next_trial(ev.plan, state.history, lambda t: _staging_cost(ev, state, t))) is not None:
+        yield trial
+
+
+def _staging_cost(ev: Evaluation, state: LoopState, trial: PlannedTrial) -> float | None:
+    """What staging `trial` from the current scene costs, None where it does not apply there."""
+    staged = materialize(trial, ev.task, state.scene, state.previous, trial_rng(ev.seed, trial.index))
+    return None if staged.instance is None else ev.cost_model(state.scene, staged.instance.scene)
 
 
 def _observed(record: TrialRecord, observers: Sequence[EpisodeObserver]) -> TrialRecord:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from contextlib import suppress
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -30,6 +30,8 @@ if TYPE_CHECKING:
 
 # How an episode can end without a label: the operator stopped the robot, or the robot went away.
 ABORTS = ("estop", "disconnected")
+# The shortest pause between two tries to reconnect a lost robot.
+RETRY_S = 0.5
 
 
 class RobotLostError(UserError):
@@ -57,8 +59,8 @@ class RobotRunner:
         max_episode_s: float | None = None,
         observers: Sequence[EpisodeObserver] = (),
         cost_unit: str = "m",
-        reconnect_attempts: int = 3,
-        reconnect_wait_s: float = 1.0,
+        reconnect_s: float = 5.0,
+        say: Callable[[str], None] | None = None,
     ) -> None:
         self.scene_io = reports_scene(robot, task.storage_scene().objects)
         if operator is None and not self.scene_io:
@@ -71,7 +73,9 @@ class RobotRunner:
         self.max_steps, self.max_episode_s = max_steps, max_episode_s
         self.observers = list(observers)
         self.cost_unit = cost_unit
-        self.reconnect_attempts, self.reconnect_wait_s = reconnect_attempts, reconnect_wait_s
+        # After a lost link, reconnecting is tried for `reconnect_s`, once per control period (at least every
+        # RETRY_S); `say` tells the operator how long that takes.
+        self.reconnect_s, self.say = reconnect_s, say
         self.pose_keys: tuple[str, str] | None = getattr(robot, "pose_keys", None)
         # Episodes end once the scene shows the goal, as the benchmark's do, where the scene can be read.
         self.stop_on_goal = self.scene_io and task.outcome == "predicate"
@@ -178,16 +182,25 @@ class RobotRunner:
             self.robot.send_action(dict.fromkeys(self.robot.action_features, 0.0))
         with suppress(Exception):
             self.robot.disconnect()
-        for _ in range(self.reconnect_attempts):
+        if self.say is not None:
+            self.say(
+                f"the robot ({self.robot.name}) disconnected ({' '.join(str(error).split())}); "
+                f"trying to reconnect for up to {self.reconnect_s:g} s"
+            )
+        deadline = time.monotonic() + self.reconnect_s
+        while True:
             try:
                 self.robot.connect()
                 return
             except Exception as reconnect_error:
                 error = reconnect_error
-                time.sleep(self.reconnect_wait_s)
+            wait = max(self.period, RETRY_S)
+            if time.monotonic() + wait > deadline:
+                break
+            time.sleep(wait)
         self._halt = RobotLostError(
-            f"the robot ({self.robot.name}) disconnected and could not reconnect ({' '.join(str(error).split())}); "
-            "check it, then continue the run"
+            f"the robot ({self.robot.name}) disconnected and could not reconnect within {self.reconnect_s:g} s "
+            f"({' '.join(str(error).split())}); check it, then continue the run"
         )
 
     def _scene_after(self, context: TrialContext, episode: Episode) -> Scene:

@@ -3,6 +3,7 @@ by the evaluator; when its link drops, the trial is aborted and the session reco
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -102,16 +103,29 @@ def test_a_dropped_link_aborts_the_trial_and_the_session_reconnects(site, tmp_pa
     assert any(r["status"] == "done" for r in records[1:])
 
 
+@pytest.mark.slow
 def test_a_robot_that_cannot_reconnect_stops_the_session_resumably(site, tmp_path):
     run = tmp_path / "run"
     result = evaluate(site, run, "--robot.fail_at_action=5", "--robot.can_reconnect=false")
     assert result.returncode == 2
+    assert "disconnected (link lost); trying to reconnect for up to 5 s" in result.stdout
+    assert "aborted: the robot disconnected after 4 steps" in result.stdout
     assert (
-        "no route to host 10.0.0.7" in result.stderr
+        "could not reconnect within 5 s (no route to host 10.0.0.7)" in result.stderr
         and f"continue the run with --output_dir={run} --resume=true" in result.stderr
     )
     assert [r["status"] for r in journal(run)] == ["aborted"]
-    assert json.loads((run / "summary.json").read_text())["complete"] is False
-    resumed = evaluate(site, run, "--resume=true", "--robot.can_reconnect=true")  # back, with a setting changed
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["complete"] is False and summary["overall"]["aborted"] == 1
+    kept = tmp_path / "kept"
+    shutil.copytree(run, kept)
+    # Back, with robot settings changed: the aborted trial runs again.
+    resumed = evaluate(site, run, "--resume=true", "--robot.can_reconnect=true", "--robot.fail_at_action=-1")
     assert resumed.returncode == 0, resumed.stderr
-    assert journal(run)[0]["status"] == "aborted" and len(journal(run)) > 1
+    assert "trial 0 was aborted when the robot disconnected; it runs again" in resumed.stdout
+    assert [r["status"] for r in journal(run)][0] == "done" and "aborted" not in {r["status"] for r in journal(run)}
+    flags = ("--resume=true", "--robot.can_reconnect=true", "--robot.fail_at_action=-1", "--rerun_aborted=false")
+    resumed = evaluate(site, kept, *flags)
+    assert resumed.returncode == 0, resumed.stderr
+    assert journal(kept)[0]["status"] == "aborted" and len(journal(kept)) == len(journal(run))
+    assert json.loads((kept / "summary.json").read_text())["overall"]["aborted"] == 1

@@ -22,6 +22,8 @@ def _group_stats(records: list[TrialRecord]) -> dict[str, Any]:
     return {
         "trials": len(done),
         "not_applicable": sum(r.status == "not_applicable" for r in records),
+        "aborted": sum(r.status == "aborted" for r in records),
+        "skipped": sum(r.status == "skipped" for r in records),
         "success_rate": _mean([float(bool(r.success)) for r in done]),
         "spl": _mean([r.spl for r in done if r.spl is not None]),
         "progress": _mean([r.progress for r in done if r.progress is not None]),
@@ -61,7 +63,10 @@ def _fmt(value: float | None, pattern: str = "{:.3f}") -> str:
 
 def format_summary(summary: dict[str, Any], unit: str) -> str:
     """A plain-text table: one row per perturbation (the original instances first), then the total."""
-    header = f"{'perturbation':<14}{'trials':>7}{'n/a':>6}{'success':>9}{'SPL':>8}{'cost (' + unit + ')':>12}"
+    header = (
+        f"{'perturbation':<14}{'trials':>7}{'n/a':>6}{'aborted':>9}{'skipped':>9}{'success':>9}{'SPL':>8}"
+        f"{'cost (' + unit + ')':>12}"
+    )
     lines = [header, "-" * len(header)]
     rows = summary["per_perturbation"]
     names = [ORIGINAL] + [name for name in rows if name != ORIGINAL]
@@ -71,13 +76,15 @@ def format_summary(summary: dict[str, Any], unit: str) -> str:
         label = perturbation_label(None if name == ORIGINAL else name)
         s = rows[name]
         lines.append(
-            f"{label:<14}{s['trials']:>7}{s['not_applicable']:>6}{_fmt(s['success_rate']):>9}"
+            f"{label:<14}{s['trials']:>7}{s['not_applicable']:>6}{s['aborted']:>9}{s['skipped']:>9}"
+            f"{_fmt(s['success_rate']):>9}"
             f"{_fmt(s['spl']):>8}{_fmt(s['cost'], '{:.2f}'):>12}"
         )
     total = summary["overall"]
     lines.append("-" * len(header))
     lines.append(
-        f"{'all':<14}{total['trials']:>7}{total['not_applicable']:>6}{_fmt(total['success_rate']):>9}"
+        f"{'all':<14}{total['trials']:>7}{total['not_applicable']:>6}{total['aborted']:>9}{total['skipped']:>9}"
+        f"{_fmt(total['success_rate']):>9}"
         f"{_fmt(total['spl']):>8}{_fmt(total['cumulative_cost'], '{:.2f}'):>12}"
     )
     return "\n".join(lines)

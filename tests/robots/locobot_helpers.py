@@ -51,6 +51,23 @@ class CountingBackend:
         return getattr(self.backend, name)
 
 
+class DyingBackend(CountingBackend):
+    """Stops its host (sets `host_stop`, the HostThread's stop event) as it starts step number `dies_at`: the host
+    goes silent mid-step, as when its process dies."""
+
+    def __init__(self, backend: Any, dies_at: int) -> None:
+        super().__init__(backend)
+        self.dies_at = dies_at
+        self.host_stop: threading.Event | None = None
+
+    def start_step(self, command: str, amount: float) -> None:
+        if len(self.started) + 1 == self.dies_at and self.host_stop is not None:
+            self.started.append((command, amount))
+            self.host_stop.set()  # the step never finishes
+            return
+        super().start_step(command, amount)
+
+
 class ChaosProxy:
     """Sits between client and host on the command and observation channels; each message is dropped,
     sent twice, or held back and delivered after later ones, at random."""

@@ -16,7 +16,14 @@ from lerobot_robot_locobot.keys import create_keys
 
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.vln.locobot_sim import SimBackend
-from tests.robots.locobot_helpers import FREE_PORTS, ChaosProxy, CountingBackend, client_config, free_port
+from tests.robots.locobot_helpers import (
+    FREE_PORTS,
+    ChaosProxy,
+    CountingBackend,
+    DyingBackend,
+    client_config,
+    free_port,
+)
 from tests.robots.test_ros2_backend import FakeDriver
 
 
@@ -129,6 +136,29 @@ def test_a_client_reconnects_and_survives_a_host_restart_between_steps(connect):
         assert heading(robot) == pytest.approx(0.0)
         robot.send_action(one_hot("turn_right"))
         assert heading(robot) == pytest.approx(math.radians(-30))
+
+
+@pytest.mark.parametrize("publish_hz", [30.0, 60.0])
+def test_a_host_that_dies_mid_step_is_given_up_after_its_publishing_periods_not_the_step_timeout(connect, publish_hz):
+    backend = DyingBackend(SimBackend(SimConfig()), dies_at=2)
+    thread = HostThread(HostConfig(port_command=0, port_observation=0, port_rpc=0, publish_hz=publish_hz), backend)
+    backend.host_stop = thread.stop_event
+    with thread as host:
+        robot = connect(host.ports)
+        assert robot._link.lost_after_s == pytest.approx(60 / publish_hz)  # LOST_PERIODS of the host's period
+        robot.send_action(one_hot("turn_left"))
+        start = time.monotonic()
+        with pytest.raises(
+            LocobotConnectionError,
+            match=rf"fell silent during step 2 \(turn_left\): no observation for {60 / publish_hz:g} s",
+        ):
+            robot.send_action(one_hot("turn_left"))
+        assert time.monotonic() - start < 60 / publish_hz + 1.0 < robot.config.step_timeout_s
+
+
+def test_the_silence_limit_can_be_set(connect):
+    with HostThread(FREE_PORTS) as host:
+        assert connect(host.ports, observation_timeout_s=0.7)._link.lost_after_s == 0.7
 
 
 def test_a_client_that_cannot_reach_the_host_fails_with_one_line_naming_the_address(tmp_path):

@@ -23,9 +23,10 @@ class LocobotConfig(RobotConfig):
     connect_timeout_s: float = 5.0
     # Seconds one discrete step may take on the robot before send_action fails.
     step_timeout_s: float = 15.0
-    # get_observation waits this long for a fresh observation (published within the last three publishing
-    # periods of the host), then fails: a stale image is never returned.
-    observation_timeout_s: float = 2.0
+    # The host counts as gone once no observation has arrived for this long, while get_observation waits for a
+    # fresh one (published within the last three publishing periods; a stale image is never returned) or while a
+    # step runs. Default: 60 of the host's publishing periods (2 s at its default 30 Hz).
+    observation_timeout_s: float | None = None
     # Camera image size the host sends (it resizes or renders to it), and whether it adds aligned depth.
     camera_width: int = 640
     camera_height: int = 480
@@ -55,5 +56,7 @@ class LocobotConfig(RobotConfig):
             raise ValueError(
                 f"--robot.forward_m must be in (0, 1] and --robot.turn_deg in (0, 90], got {self.forward_m}, {self.turn_deg}"
             )
+        if self.observation_timeout_s is not None and not self.observation_timeout_s > 0:
+            raise ValueError(f"--robot.observation_timeout_s must be positive, got {self.observation_timeout_s}")
         if (self.client_secret_key is None) != (self.server_public_key is None):
             raise ValueError("--robot.client_secret_key and --robot.server_public_key go together: set both or neither")

@@ -18,6 +18,8 @@ from lerobot_robot_locobot.protocol import ProtocolError, address, decode, decod
 RESEND_S = 0.05
 # An observation is fresh while it is younger than this many of the host's publishing periods.
 FRESH_PERIODS = 3
+# Without --robot.observation_timeout_s, a host silent for this many of its publishing periods is gone.
+LOST_PERIODS = 60
 
 
 class LocobotConnectionError(ConnectionError):
@@ -51,6 +53,8 @@ class HostLink:
         self._fresh_from = 0  # the next observation must have at least this seq (after a remote call)
         self._running: int | None = None
         self._max_age = 0.1
+        self.lost_after_s = 2.0  # set from the host's publishing rate by the handshake
+        self._heard = time.monotonic()  # when the last observation arrived
         self._clock_offset = float("inf")
         try:
             self._command = self._socket(zmq.PUSH, config.port_command, conflate=True)
@@ -91,6 +95,9 @@ class HostLink:
         self.capabilities = frozenset(reply["capabilities"])
         self._fresh_from = int(reply["seq"])  # sequence numbers start afresh in each host process
         self._max_age = FRESH_PERIODS / float(reply["publish_hz"])
+        timeout = self.config.observation_timeout_s
+        self.lost_after_s = LOST_PERIODS / float(reply["publish_hz"]) if timeout is None else timeout
+        self._heard = time.monotonic()
 
     def call(self, op: str, timeout_s: float | None = None, **fields: Any) -> dict[str, Any]:
         """A remote call; its effects show in every observation from the reply's `seq` on."""
@@ -119,10 +126,16 @@ class HostLink:
         self._running = step
         try:
             while not self._acknowledged(step):
+                where = address(self.config.host, self.config.port_command)
+                if time.monotonic() - self._heard > self.lost_after_s:  # a dead host is not waited for to the end
+                    raise LocobotConnectionError(
+                        f"the LoCoBot host at {where} fell silent during step {step} ({command}): no observation "
+                        f"for {self.lost_after_s:g} s"
+                    )
                 if time.monotonic() > deadline:
                     raise LocobotConnectionError(
-                        f"the LoCoBot host at {address(self.config.host, self.config.port_command)} did not finish "
-                        f"step {step} ({command}) within {self.config.step_timeout_s:g} s"
+                        f"the LoCoBot host at {where} did not finish step {step} ({command}) within "
+                        f"{self.config.step_timeout_s:g} s"
                     )
                 self._send(message)
                 self.poll(int(RESEND_S * 1000))
@@ -138,12 +151,12 @@ class HostLink:
         """The newest observation: one the host published within the last few publishing periods and after
         the last remote call took effect, waiting up to the observation timeout for it."""
         self.poll(0)  # take what has arrived; wait only when it is not fresh
-        deadline = time.monotonic() + self.config.observation_timeout_s
+        deadline = time.monotonic() + self.lost_after_s
         while self.latest is None or self.latest.seq < self._fresh_from or self._stale():
             if time.monotonic() > deadline:
                 raise LocobotConnectionError(
                     f"no observation from the LoCoBot host at {address(self.config.host, self.config.port_observation)} "
-                    f"for {self.config.observation_timeout_s:g} s"
+                    f"for {self.lost_after_s:g} s"
                 )
             self.poll(int(RESEND_S * 1000))
         return self.latest
@@ -157,6 +170,7 @@ class HostLink:
                 data = self._observation.recv(zmq.NOBLOCK)
             except zmq.Again:
                 return
+            self._heard = time.monotonic()
             try:
                 header, frames = decode_observation(data)
             except ProtocolError:

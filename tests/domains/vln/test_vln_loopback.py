@@ -4,6 +4,7 @@ driven by the same RobotRunner and eval CLI as on hardware."""
 from __future__ import annotations
 
 import json
+import time
 
 import pytest
 from lerobot_robot_locobot import Locobot
@@ -68,6 +69,29 @@ def test_the_shipped_contrast_evaluation_runs_its_75_trials(host, tmp_path):
     assert main(eval_flags(host, tmp_path, "--n_instances=5", "--repeats=3", "--rerun=false")) == 0
     records = journal(tmp_path)
     assert len(records) == 75 and all(r["status"] == "done" and r["success"] for r in records)
+
+
+def test_a_host_that_dies_mid_trial_is_given_up_in_seconds_and_said_aborted(tmp_path, capsys):
+    from lerobot_robot_locobot.config_host import SimConfig
+
+    from lerobot_contrast.domains.vln.locobot_sim import SimBackend
+    from tests.robots.locobot_helpers import DyingBackend
+
+    backend = DyingBackend(SimBackend(SimConfig()), dies_at=5)
+    thread = HostThread(FREE_PORTS, backend)
+    backend.host_stop = thread.stop_event
+    with thread as host:
+        start = time.monotonic()
+        assert main(eval_flags(host, tmp_path, "--n_instances=1", "--perturbations=[L]", "--rerun=false")) == 2
+        took = time.monotonic() - start
+    out, err = capsys.readouterr()
+    # 2 s of silence (60 periods at 30 Hz), then 5 s of reconnecting, each try waiting up to its connect timeout.
+    assert took < 2 + 5 + 5 + 3, took
+    assert "fell silent during step 5 (forward): no observation for 2 s); trying to reconnect for up to 5 s" in out
+    assert "aborted: the robot disconnected after 4 steps" in out and "not applicable" not in out
+    assert "could not reconnect within 5 s" in err
+    assert [r["status"] for r in journal(tmp_path)] == ["aborted"]
+    assert json.loads((tmp_path / "run" / "summary.json").read_text())["overall"]["aborted"] == 1
 
 
 def test_an_unreachable_robot_is_one_line_and_leaves_no_run_directory(tmp_path, capsys):
