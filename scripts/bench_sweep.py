@@ -1,11 +1,12 @@
 """Benchmark of the sweep engine: the same simulated cells run one after another in this process (no Ray), then
 as a sweep on a local Ray with 1 worker, then with 2 workers.
 
-Usage: python scripts/bench_sweep.py [--cells 4] [--n_instances 8] [--max_episode_steps 100]
+Usage: python scripts/bench_sweep.py [--cells 4] [--n_instances 16] [--max_episode_steps 100]
 The last line is `cells=... wall_1worker_s=... wall_2workers_s=... speedup=... overhead_per_cell_s=...`: speedup is
 1 worker's wall time over 2 workers', and the overhead per cell is the 1-worker sweep's wall time less the
-sequential one, per cell (Ray's startup, reported on the line before, not included). Goals on an idle 2-core
-machine: speedup at least 1.7, overhead under 2 s per cell. Other load on the cores lowers the speedup.
+sequential one, per cell. The line before gives Ray's startup (not in the overhead) and inside_cells_1worker_s, the
+time the 1-worker sweep's cells took in their worker (the first cell there pays the worker's imports). Goals on an
+idle 2-core machine: speedup at least 1.7, overhead under 2 s per cell. Other load on the cores lowers the speedup.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from lerobot_contrast.sweep_file import read_sweep_file, sweep_cells
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--cells", type=int, default=4)
-    p.add_argument("--n_instances", type=int, default=8)
+    p.add_argument("--n_instances", type=int, default=16)
     p.add_argument("--max_episode_steps", type=int, default=100)
     return p.parse_args(argv)
 
@@ -50,8 +51,9 @@ def sequential(path: Path, out: Path) -> float:
     return time.perf_counter() - start
 
 
-def on_ray(path: Path, out: Path, workers: int) -> tuple[float, float]:
-    """Ray's startup and the sweep's wall time, on a local Ray with `workers` CPUs."""
+def on_ray(path: Path, out: Path, workers: int) -> tuple[float, float, float]:
+    """Ray's startup, the sweep's wall time and the time spent inside the cells, on a local Ray with `workers`
+    CPUs."""
     start = time.perf_counter()
     ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
     started = time.perf_counter()
@@ -62,7 +64,7 @@ def on_ray(path: Path, out: Path, workers: int) -> tuple[float, float]:
     for outcome in outcomes.values():
         if outcome.status != "complete":
             raise SystemExit(f"error: {outcome.name}: {outcome.error}")
-    return started - start, time.perf_counter() - started
+    return started - start, time.perf_counter() - started, sum(o.seconds for o in outcomes.values())
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -72,9 +74,12 @@ def main(argv: list[str] | None = None) -> None:
         path = Path(tmp) / "bench.yaml"
         path.write_text(yaml.safe_dump(spec(args), sort_keys=False), encoding="utf-8")
         seq = sequential(path, Path(tmp) / "sequential")
-        start_1, wall_1 = on_ray(path, Path(tmp) / "one", 1)
-        start_2, wall_2 = on_ray(path, Path(tmp) / "two", 2)
-    print(f"sequential_s={seq:.1f} ray_start_1worker_s={start_1:.1f} ray_start_2workers_s={start_2:.1f}")
+        start_1, wall_1, inside_1 = on_ray(path, Path(tmp) / "one", 1)
+        start_2, wall_2, _ = on_ray(path, Path(tmp) / "two", 2)
+    print(
+        f"sequential_s={seq:.1f} inside_cells_1worker_s={inside_1:.1f} ray_start_1worker_s={start_1:.1f} "
+        f"ray_start_2workers_s={start_2:.1f}"
+    )
     print(
         f"cells={args.cells} wall_1worker_s={wall_1:.1f} wall_2workers_s={wall_2:.1f} speedup={wall_1 / wall_2:.2f} "
         f"overhead_per_cell_s={(wall_1 - seq) / args.cells:.2f}"
