@@ -42,7 +42,8 @@ class EvalConfig:
     # Perturbations the contrast strategy applies after each base instance, in order (default: all of the
     # task's), e.g. LB1,LB2,SB1,SB2.
     perturbations: list[str] | None = None
-    # Order in which base instances are visited: iid (as sampled) or cost_aware (same bases, cheaper to stage).
+    # Order in which base instances are visited: iid (as sampled), cost_aware (same bases, cheaper to stage), or
+    # adaptive (bases as sampled; after each trial, the perturbation with most information per staging cost).
     order: str = "iid"
     # Number of i.i.d. base instances in the evaluation set (default: the task's own, 50 for Language-Table,
     # the 5 shipped arrangements for VLN).

@@ -160,7 +160,10 @@ def planned_evaluation(cfg: EvalConfig) -> Evaluation:
     task, plan = build_plan(cfg)
     if source is not None:
         check_same_plan(source, plan)
-    planned = Evaluation(task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed, stop=stop_rule(cfg, plan))
+    planned = Evaluation(
+        task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed, stop=stop_rule(cfg, plan),
+        adaptive=cfg.order == "adaptive",
+    )  # fmt: skip
     check_budget(planned)
     return planned
 

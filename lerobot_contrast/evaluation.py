@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from lerobot_contrast.console import trial_line
+from lerobot_contrast.contrast.adaptive import next_trial
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.metrics import scored
@@ -71,6 +72,7 @@ class Evaluation:
     labels: Mapping[str, Any] = field(default_factory=dict)  # e.g. strategy and policy, for the summary and logs
     verbose: bool = False  # print a line per trial
     stop: StopRule | None = None  # sequential stopping rules, checked after every trial
+    adaptive: bool = False  # --order=adaptive: each next trial is chosen from the outcomes so far (adaptive.py)
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -104,10 +106,11 @@ class LoopState:
     cumulative_cost: float = 0.0
     previous: Staged | None = None
     next_index: int = 0
+    history: list[TrialRecord] = field(default_factory=list)  # the records so far, for --order=adaptive
 
     @classmethod
     def resume(cls, records: list[TrialRecord], initial_scene: Scene) -> LoopState:
-        state = cls(scene=initial_scene, next_index=len(records))
+        state = cls(scene=initial_scene, next_index=len(records), history=list(records))
         for record in records:
             state.previous = Staged(record.instance, record.staging)
             if record.status in STAGED and record.scene_after is not None:
@@ -285,7 +288,7 @@ def trials(
     `observers` (those watching the episodes `execute` runs) receive each record and name their files in it."""
     ev = evaluation
     settings = ev.settings
-    for trial in ev.plan[state.next_index :]:
+    for trial in _upcoming(ev, state):
         if exceeds_budget(state.cumulative_cost, ev.budget):
             return
         staged = materialize(trial, ev.task, state.scene, state.previous, trial_rng(ev.seed, trial.index))
@@ -316,7 +319,23 @@ def trials(
         else:  # skipped: nothing was staged, so the next trial starts where this one would have
             cost = 0.0
         record = scored(context, outcome, cost, state.cumulative_cost, started_at)
+        state.history.append(record)
         yield _observed(record, observers) if outcome.status in STAGED else record
+
+
+def _upcoming(ev: Evaluation, state: LoopState) -> Iterator[PlannedTrial]:
+    """The plan from `state.next_index`; with adaptive order, each next trial as the outcomes so far choose it."""
+    if not ev.adaptive:
+        yield from ev.plan[state.next_index :]
+        return
+    while (trial := next_trial(ev.plan, state.history, lambda t: _staging_cost(ev, state, t))) is not None:
+        yield trial
+
+
+def _staging_cost(ev: Evaluation, state: LoopState, trial: PlannedTrial) -> float | None:
+    """What staging `trial` from the current scene costs, None where it does not apply there."""
+    staged = materialize(trial, ev.task, state.scene, state.previous, trial_rng(ev.seed, trial.index))
+    return None if staged.instance is None else ev.cost_model(state.scene, staged.instance.scene)
 
 
 def _observed(record: TrialRecord, observers: Sequence[EpisodeObserver]) -> TrialRecord:

@@ -85,8 +85,9 @@ STRATEGIES = {
 
 
 # How base instances are visited: "iid" keeps the sampled order; "cost_aware" reorders the bases, each with
-# its chain of trials, to cut staging cost (see schedule.py).
-ORDERS = ("iid", "cost_aware")
+# its chain of trials, to cut staging cost (see schedule.py); "adaptive" keeps the sampled order and plans as
+# "iid", and the run chooses each next trial from the outcomes so far (see adaptive.py).
+ORDERS = ("iid", "cost_aware", "adaptive")
 
 
 def make_plan(
