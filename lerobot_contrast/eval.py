@@ -172,9 +172,10 @@ def stop_rule(cfg: EvalConfig, plan: list[PlannedTrial]) -> StopRule | None:
     """The --stop.* rules, or None without any; a width or alpha outside (0, 1), or a --stop.compare run whose
     plan, task or metric differs, is refused in one line."""
     if cfg.stop.compare is not None:
-        return compare_rule(cfg.stop.compare, plan, cfg.task, cfg.stop.width, cfg.stop.alpha)
-    rule = StopRule(cfg.stop.width, cfg.stop.alpha)
-    return rule if rule.active else None
+        rule = compare_rule(cfg.stop.compare, plan, cfg.task, cfg.stop.width, cfg.stop.alpha)
+    else:
+        rule = StopRule(cfg.stop.width, cfg.stop.alpha)
+    return dataclasses.replace(rule, originals_only=cfg.order == "adaptive") if rule.active else None
 
 
 def equipped(

@@ -22,7 +22,7 @@ import numpy as np
 from lerobot_contrast.contrast.confseq import ConfidenceSequence, difference_bounds, difference_unit
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Scene
-from lerobot_contrast.contrast.stopping import Monitor, StopRule, excludes_zero
+from lerobot_contrast.contrast.stopping import Monitor, StopRule, excludes_zero, trial_key
 from lerobot_contrast.contrast.strategy import PlannedTrial
 from lerobot_contrast.contrast.trial import TrialRecord
 from lerobot_contrast.reporting import stats
@@ -84,14 +84,14 @@ def overhead_per_trial(rng: np.random.Generator, bases: int = 100, per_base: int
     plan, records = [], []
     for j in range(bases):
         base = Instance(id=f"b{j}", family="f", instruction="go", scene=scene)
-        for _ in range(per_base):
-            index = len(plan)
-            plan.append(PlannedTrial(index, base, None, "reset"))
+        for k in range(per_base):
+            index, name = len(plan), None if k == 0 else f"P{k}"
+            plan.append(PlannedTrial(index, base, name, "reset"))
             success = bool(rng.random() < 0.5)
             records.append(
-                TrialRecord(index, base.id, None, None, "f", "reset", 0, "done", base, 0.0, 0.0, success, None, 0.0)
+                TrialRecord(index, base.id, name, None, "f", "reset", 0, "done", base, 0.0, 0.0, success, None, 0.0)
             )
-    reference = {r.index: float(rng.random() < 0.5) for r in records}
+    reference = {trial_key(r): float(rng.random() < 0.5) for r in records}
     monitor = Monitor(plan, StopRule(width=1e-9, alpha=ALPHA, reference=reference, reference_name="ref"))
     start = time.perf_counter()
     for record in records:

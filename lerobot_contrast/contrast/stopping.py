@@ -31,14 +31,17 @@ class StopError(UserError):
 @dataclass(frozen=True)
 class StopRule:
     """`width`: stop when the headline metric's anytime-valid interval is at most this wide. `reference`: the
-    headline value of each done trial (by plan index) of the run compared against, in `metric`. `alpha`:
+    headline value of each done trial of the run compared against (by `trial_key`), in `metric`. `alpha`:
     1 - confidence."""
 
     width: float | None = None
     alpha: float = 0.05
-    reference: Mapping[int, float] | None = None
+    reference: Mapping[tuple[str, str | None, int], float] | None = None
     reference_name: str = ""
     metric: str | None = None  # the headline metric; None: the first done trial decides (see `headline_metric`)
+    # Count only the original instances: with --order=adaptive, which perturbations run on a base depends on earlier
+    # outcomes, so only the originals stay an i.i.d. sample of one mean.
+    originals_only: bool = False
 
     def __post_init__(self) -> None:
         if self.width is not None and not 0.0 < self.width < 1.0:
@@ -73,11 +76,9 @@ class Monitor:
 
     def __init__(self, plan: list[PlannedTrial], rule: StopRule) -> None:
         self.rule, self.metric = rule, rule.metric
-        self.last_index: dict[str, int] = {}
-        for trial in plan:
-            self.last_index[trial.base.id] = trial.index
-        counts = np.unique([t.base.id for t in plan], return_counts=True)[1] if plan else np.ones(1)
-        self.most_trials = float(counts.max())
+        counted = [t for t in plan if self._counts(t)]
+        self.remaining = dict(zip(*np.unique([t.base.id for t in counted], return_counts=True), strict=True))
+        self.most_trials = float(max(self.remaining.values(), default=1))
         self.open: dict[str, list[tuple[float, float | None]]] = {}
         self.interval = ConfidenceSequence(rule.alpha)
         self.difference = ConfidenceSequence(rule.alpha) if rule.reference is not None else None
@@ -90,14 +91,21 @@ class Monitor:
         if record.status == "done":
             self._check_metric(record)
         value = None if self.metric is None else headline_value(record, self.metric)
+        if not self._counts(record):
+            value = None
         if value is not None:
-            other = None if self.rule.reference is None else self.rule.reference.get(record.index)
+            other = None if self.rule.reference is None else self.rule.reference.get(trial_key(record))
             self.open.setdefault(record.base_id, []).append((value, other))
-        if self.last_index.get(record.base_id) == record.index:
-            self._close(self.open.pop(record.base_id, []))
+        if self._counts(record) and record.base_id in self.remaining:
+            self.remaining[record.base_id] -= 1
+            if self.remaining[record.base_id] == 0:  # the base's last counted trial: it joins as one unit
+                self._close(self.open.pop(record.base_id, []))
         if self.reason is None:
             self.reason = self._verdict()
         return self.reason
+
+    def _counts(self, trial: PlannedTrial | TrialRecord) -> bool:
+        return not (self.rule.originals_only and trial.perturbation is not None)
 
     def _check_metric(self, record: TrialRecord) -> None:
         own = headline_metric([record])
@@ -214,11 +222,17 @@ def reason_text(reason: str, rule: StopRule) -> str:
     }[reason]
 
 
-def reference_values(records: Iterable[TrialRecord], metric: str) -> dict[int, float]:
-    """The compared run's headline value per trial index (done trials only)."""
+def trial_key(record: TrialRecord) -> tuple[str, str | None, int]:
+    """What pairs a trial with the compared run's: its base, perturbation and repeat (indices differ under
+    --order=adaptive)."""
+    return (record.base_id, record.perturbation, record.repeat)
+
+
+def reference_values(records: Iterable[TrialRecord], metric: str) -> dict[tuple[str, str | None, int], float]:
+    """The compared run's headline value per trial (done trials only), by `trial_key`."""
     out = {}
     for record in records:
         value = headline_value(record, metric)
         if value is not None and math.isfinite(value):
-            out[record.index] = value
+            out[trial_key(record)] = value
     return out

@@ -93,3 +93,11 @@ def test_trials_without_a_value_do_not_count_and_missing_spl_is_refused():
     assert monitor.metric == "spl" and monitor.bases == 1
     with pytest.raises(StopError, match="headline metric progress, but this run's earlier trials' is spl"):
         monitor.observe(record(plan[2], True, spl=None))
+
+
+def test_with_adaptive_order_only_the_originals_count():
+    plan = plan_of(3, 2)
+    monitor = Monitor(plan, StopRule(width=0.5, originals_only=True))
+    for trial in plan:
+        monitor.observe(record(trial, trial.perturbation is None))
+    assert monitor.bases == 3 and sum(monitor.sums) == 3 and sum(monitor.sizes) == 3
