@@ -170,6 +170,13 @@ def notes_section(runs: list[Run]) -> list[str]:
             notes.append(f"{run.name} is incomplete: its numbers cover the trials recorded so far.")
         bases = run.results["base_id"].nunique()
         planned = run.config.get("n_instances")
+        if run.config.get("order") == "adaptive":
+            notes.append(
+                f"{run.name} chose which perturbations to run on each base from earlier outcomes (--order=adaptive): "
+                "its original instances' mean is an unbiased i.i.d. estimate, but its per-perturbation rows, "
+                "sensitivities and pooled 'all' means are adaptive (which bases each covers depends on the outcomes), "
+                "so read them as descriptive, with approximate intervals."
+            )
         if run.config.get("order") == "cost_aware" and planned and bases < planned:
             notes.append(
                 f"{run.name} visited {bases} of {planned} bases in cost-aware order: a prefix of a tour is not an "

@@ -112,3 +112,12 @@ def test_an_adaptive_run_keeps_bases_in_planned_order_and_resumes_to_the_same_ch
         return [(d["index"], d["base_id"], d["perturbation"], d["success"]) for d in lines]
 
     assert chosen(tmp_path / "cut") == chosen(tmp_path / "whole")
+
+
+def test_the_report_says_which_estimates_of_an_adaptive_run_stay_unbiased(tmp_path):
+    from lerobot_contrast.reporting import load_run
+    from lerobot_contrast.reporting.build import build_report
+
+    evaluate(tmp_path / "run")
+    text = build_report([load_run(str(tmp_path / "run"))], tmp_path / "report").path.read_text()
+    assert "original instances' mean is an unbiased i.i.d. estimate" in text and "per-perturbation rows" in text
