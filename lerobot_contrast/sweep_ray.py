@@ -17,6 +17,9 @@ from lerobot_contrast.sweep_cell import CellOutcome, run_cell, wants_gpu
 from lerobot_contrast.sweep_file import Cell
 
 POLL_S = 0.5
+# Each cell runs on one thread: the cells are the parallelism. Set when the worker process starts, before its
+# numerical libraries read them (Ray would otherwise pass on the driver's OMP_NUM_THREADS).
+ONE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
 
 
 @dataclass
@@ -62,7 +65,11 @@ def run_cells(
     task = ray.remote(run_cell)
     refs = {
         task.options(
-            num_cpus=1, num_gpus=int(wants_gpu(cell.config.policy)), max_retries=max_retries, name=f"cell {cell.name}"
+            num_cpus=1,
+            num_gpus=int(wants_gpu(cell.config.policy)),
+            max_retries=max_retries,
+            name=f"cell {cell.name}",
+            runtime_env={"env_vars": ONE_THREAD},
         ).remote(cell.name, cell.config): cell
         for cell in cells
     }
