@@ -21,7 +21,9 @@ import math
 import numpy as np
 
 GRID_POINTS = 1001
-TRUNCATION = 0.5  # c in the paper: bets at most c/m (or c/(1-m)), keeping every factor of the wealth above 1-c
+# c in the paper: bets at most c/m (or c/(1-m)), keeping every factor of the wealth above 1-c. The paper suggests
+# 1/2 or 3/4; 3/4 lets large differences decide in fewer bases (scripts/savings_sequential.py).
+TRUNCATION = 0.75
 HEDGE = 0.5  # theta: the weight of the upward bettor
 
 

@@ -2,7 +2,9 @@
 is narrower than `width`, or once the paired difference from a finished run of the same plan is decided.
 
 Base instances are the i.i.d. units: a base's trials update the confidence sequences when its last planned trial is
-recorded, each base weighted by its share of the most trials any base has planned (see confseq). The state is a
+recorded. For the headline metric each base is weighted by its share of the most trials any base has planned, so the
+interval covers the mean over trials (see confseq); the comparison weighs every base alike (the mean over bases of
+each base's mean paired difference, 0 for two equal policies), which decides sooner. The state is a
 function of the records in trial order, so a resumed run rebuilds it from its journal exactly.
 """
 
@@ -130,7 +132,7 @@ class Monitor:
         paired = [(v, o) for v, o in values if o is not None]
         if self.difference is not None and paired:
             a, b = np.array(paired).T
-            self.difference.update(difference_unit(a, b).mean(), len(paired) / self.most_trials)
+            self.difference.update(difference_unit(a, b).mean())
 
     def _verdict(self) -> str | None:
         if self.difference is not None and excludes_zero(*self.bounds_difference()):

@@ -36,8 +36,8 @@ def test_the_interval_only_narrows_and_holds_its_sample_mean():
 
 
 def test_one_value_decides_nothing():
-    """After X_1 = 1 the upward bet at m is at most 1/(2m), so the hedged wealth 1/2 (1 + (1 - m) / (2m)) reaches
-    1/alpha = 20 only below m = 1/79, where the plug-in bet sqrt(2 log 40 / (1/4 log 2)) = 6.5 caps it at 3.8."""
+    """After X_1 = 1 the upward bet at m is at most 3/(4m), so the hedged wealth 1/2 (1 + 3 (1 - m) / (4m)) reaches
+    1/alpha = 20 only below m = 3/159, where the plug-in bet sqrt(2 log 40 / (1/4 log 2)) = 6.5 caps it at 3.8."""
     cs = ConfidenceSequence(0.05)
     cs.update(1.0)
     assert (cs.low[0], cs.high[0]) == (0.0, 1.0)
