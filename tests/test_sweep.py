@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pandas as pd
+import psutil
 import pytest
 import ray
 import yaml
@@ -66,15 +67,16 @@ def assert_whole(path: Path, out: Path) -> None:
 
 
 def running_cells() -> dict[str, int]:
-    """Worker processes running a sweep cell, by cell name (Ray titles them `ray::cell NAME`)."""
+    """This test session's worker processes running a sweep cell, by cell name (Ray titles them `ray::cell NAME`).
+    The module's Ray was started here, so its workers descend from this process; other sweeps on the machine do not."""
     found = {}
-    for proc in Path("/proc").iterdir():
+    for proc in psutil.Process().children(recursive=True):
         try:
-            title = (proc / "cmdline").read_bytes().split(b"\0")[0].decode()
-        except (OSError, ValueError):
+            title = proc.cmdline()[0] if proc.cmdline() else ""
+        except psutil.Error:
             continue
         if title.startswith("ray::cell "):
-            found[title.removeprefix("ray::cell ")] = int(proc.name)
+            found[title.removeprefix("ray::cell ")] = proc.pid
     return found
 
 
