@@ -5,6 +5,8 @@ equals an uninterrupted one, its LeRobotDataset and Rerun files included."""
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import subprocess
 import sys
 import time
@@ -62,6 +64,12 @@ elif moment == "journal_torn":  # half a line reaches the disk
     journal._append_line = torn
 elif moment == "final_write":  # results.parquet is being written after the last trial
     after(pq, "write_table", lambda args, _: str(args[1]).endswith("results.parquet.tmp"))
+elif moment == "disk_full":  # the disk fills up as the journal line is written
+    def full(path, data, real=journal._append_line):
+        if json.loads(data)["index"] == at:
+            raise OSError(28, os.strerror(28))
+        return real(path, data)
+    journal._append_line = full
 elif moment == "hold_after_append":
     after(journal.Journal, "append", lambda args, _: args[1].index == at, then=hold)
 sys.exit(main(sys.argv[3:]))
@@ -170,3 +178,57 @@ def test_a_second_writer_is_refused_naming_the_first(tmp_path, reference, monkey
     assert f"is in use by process {first.pid} (an evaluation, since " in second.stderr
     assert first.returncode == 0, stderr[-3000:]
     assert_same_run(run, reference)
+
+
+@pytest.mark.slow
+def test_a_full_disk_is_one_line_and_the_run_resumes_once_there_is_room(tmp_path, reference):
+    run = tmp_path / "run"
+    full = killed_at("disk_full", 12, *ARGS, f"--output_dir={run}")
+    assert full.returncode == 2 and full.stderr.count("\n") == 1, full.stderr[-3000:]
+    assert (
+        f"error: no space left on the disk holding {run}; free space and resume with --output_dir={run} " in full.stderr
+    )
+    assert leftovers(run) == [] and len(journal(run)) == 12
+    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
+    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    assert_same_run(run, reference)
+
+
+# Each size fills up at another point: config and plan, the first Rerun file, a dataset episode, later episodes.
+DISK_SIZES = ("16k", "200k", "600k", "1200k")
+ON_A_SMALL_DISK = """
+mount -t tmpfs -o size="$1" tmpfs "$2" || exit 99
+shift 2
+"$@" --output_dir="$DISK/run" > "$OUT/first.out" 2> "$OUT/first.err"; echo $? > "$OUT/first.rc"
+find "$DISK" -name '*.tmp' -o -name '*.partial' > "$OUT/leftovers"
+mount -o remount,size=512m "$DISK"
+if [ -d "$DISK/run" ]; then AGAIN=--resume=true; else AGAIN=--resume=false; fi
+"$@" --output_dir="$DISK/run" "$AGAIN" > "$OUT/again.out" 2> "$OUT/again.err"; echo $? > "$OUT/again.rc"
+cp -a "$DISK/run" "$OUT/run"
+"""
+
+
+def small_disks_mount() -> bool:
+    """Whether this machine lets an unprivileged mount namespace mount a tmpfs (else the hook test stands in)."""
+    if shutil.which("unshare") is None:
+        return False
+    probe = subprocess.run(["unshare", "-rm", "sh", "-c", "mount -t tmpfs tmpfs /mnt"], capture_output=True)
+    return probe.returncode == 0
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not small_disks_mount(), reason="no tmpfs mounts in an unprivileged namespace here")
+@pytest.mark.parametrize("size", DISK_SIZES)
+def test_a_run_on_a_small_disk_stops_in_one_line_and_completes_when_given_room(tmp_path, reference, size):
+    disk, out = tmp_path / "disk", tmp_path / "out"
+    disk.mkdir()
+    out.mkdir()
+    command = ["unshare", "-rm", "sh", "-c", ON_A_SMALL_DISK, "sh", size, str(disk)]
+    command += [sys.executable, "-m", "lerobot_contrast.eval", *ARGS]
+    subprocess.run(command, env={**os.environ, "DISK": str(disk), "OUT": str(out)}, check=True, timeout=600)
+    first, again = (out / "first.err").read_text(), (out / "again.err").read_text()
+    assert (out / "first.rc").read_text().strip() == "2" and first.count("\n") == 1, first[-3000:]
+    assert first.startswith(f"error: no space left on the disk holding {disk / 'run'}; free space and ")
+    assert (out / "leftovers").read_text() == ""
+    assert (out / "again.rc").read_text().strip() == "0", again[-3000:]
+    assert_same_run(out / "run", reference)

@@ -4,8 +4,10 @@ sent in columns when the episode ends, so the control loop only copies each fram
 
 from __future__ import annotations
 
+import errno
 import os
 import re
+import shutil
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -18,6 +20,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from PIL import Image
 
+from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
@@ -28,6 +31,11 @@ APPLICATION_ID = "lerobot_contrast"  # no "/": Rerun 0.36+ rewrites such ids
 RERUN_DIR = "rerun"
 LAYOUT_FILE = "episode_layout.rbl"
 FLUSH_TIMEOUT_S = 60.0
+ROOM_SLACK_BYTES = 256 * 1024  # room for an episode's text, series and map beyond twice its images
+
+
+class RerunWriteError(UserError):
+    pass
 
 
 def episode_path(run_dir: Path, index: int) -> Path:
@@ -130,6 +138,7 @@ class RerunEpisodeRecorder:
         path = episode_path(self.run_dir, context.index)
         partial = path.with_name(path.name + ".partial")
         self.directory.mkdir(parents=True, exist_ok=True)
+        _check_room(self.directory, episode.jpegs)
         bounds = MapBounds.around(context, episode.poses, record.scene_after, self.task)
         recording = rr.RecordingStream(APPLICATION_ID, recording_id=f"{self.run_name}-trial{context.index:06d}")
         try:
@@ -138,6 +147,8 @@ class RerunEpisodeRecorder:
             recording.flush(timeout_sec=FLUSH_TIMEOUT_S)
             recording.disconnect()  # writes the footer; only then is the file complete
             os.replace(partial, path)
+        except RuntimeError as error:  # Rerun's file writer stopped; why, it says only in its own log
+            raise _write_failed(partial, error) from None
         finally:
             partial.unlink(missing_ok=True)
         self._write_layout(episode.cameras)
@@ -211,6 +222,22 @@ class RerunEpisodeRecorder:
         layout = self.directory / LAYOUT_FILE
         if not layout.exists():
             rrb.Blueprint(episode_views(cameras, None)).save(APPLICATION_ID, layout)
+
+
+def _check_room(directory: Path, jpegs: dict[str, list[Future[bytes]]]) -> None:
+    """Refuse to start an episode file the disk cannot hold: on a full disk Rerun may stall until its flush
+    times out, or leave a file without its footer."""
+    needed = 2 * sum(len(future.result()) for futures in jpegs.values() for future in futures) + ROOM_SLACK_BYTES
+    if shutil.disk_usage(directory).free < needed:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(directory))
+
+
+def _write_failed(partial: Path, error: RuntimeError) -> Exception:
+    if shutil.disk_usage(partial.parent).free < ROOM_SLACK_BYTES:
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(partial))
+    return RerunWriteError(
+        f"{partial}: Rerun could not write the episode ({error}); check the disk, then resume the run"
+    )
 
 
 def _descriptions(task: Task | None) -> dict[str, str]:

@@ -3,6 +3,7 @@ AV1 encoder's banners) in log files in the run directory, so the run's own progr
 
 from __future__ import annotations
 
+import errno
 import logging
 import os
 import sys
@@ -15,6 +16,7 @@ LOG_FILE = "third_party.log"
 ENCODER_LOG_FILE = "av1_encoder.log"
 OWN_LOGGERS = ("lerobot_contrast", "lerobot_robot_locobot")
 USER_ENCODER_LOG = os.environ.get("SVT_LOG_FILE")
+NO_SPACE = os.strerror(errno.ENOSPC)
 
 
 class OnceHandler(logging.Handler):
@@ -28,8 +30,13 @@ class OnceHandler(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         try:
-            with self.path.open("a", encoding="utf-8") as log:
-                log.write(self.format(record) + "\n")
+            if NO_SPACE in record.getMessage():  # a full disk: the run stops and says so in its own one line
+                return
+            try:
+                with self.path.open("a", encoding="utf-8") as log:
+                    log.write(self.format(record) + "\n")
+            except OSError:  # the log cannot take it (a full disk): the console line below still shows it
+                pass
             lines = [line.strip() for line in record.getMessage().splitlines() if line.strip()]
             first = lines[0] if lines else record.name
             if first not in self.seen:

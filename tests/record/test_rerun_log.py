@@ -1,14 +1,18 @@
 """Per-episode Rerun recordings, checked with Rerun's own CLI and reader: files, entities, timelines, frames,
 properties, the scene map and the perturbation text."""
 
+import dataclasses
 import json
+import shutil
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import rerun as rr
 
 from lerobot_contrast.contrast.metrics import scored
 from lerobot_contrast.contrast.trial import Outcome
-from lerobot_contrast.record.rerun_log import APPLICATION_ID, LAYOUT_FILE, RerunEpisodeRecorder
+from lerobot_contrast.record.rerun_log import APPLICATION_ID, LAYOUT_FILE, RerunEpisodeRecorder, RerunWriteError
 from tests.record.conftest import STEPS, read_rrd, rerun_cli, static_row
 from tests.record.lt_episodes import FEATURES, POSE_KEYS, Episodes, contexts
 
@@ -101,3 +105,40 @@ def test_step_outside_an_episode_is_a_programming_error(tmp_path):
     with pytest.raises(RuntimeError, match="call start"):
         recorder.step(0.0, {}, {})
     recorder.close()
+
+
+def test_an_episode_the_disk_has_no_room_for_is_a_full_disk_before_rerun_writes(tmp_path, monkeypatch):
+    episodes, (context,) = Episodes(), contexts(perturbations=())
+    recorder = RerunEpisodeRecorder(tmp_path, task=episodes.task)
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: SimpleNamespace(total=1 << 30, used=1 << 30, free=4096))
+    with pytest.raises(OSError, match="No space left on device"):
+        episodes.run(recorder, context)
+    recorder.close()
+    assert list((tmp_path / "rerun").iterdir()) == []
+
+
+def test_a_failed_rerun_write_is_one_line_and_leaves_no_partial_file(tmp_path, monkeypatch):
+    episodes, (context,) = Episodes(), contexts(perturbations=())
+    recorder = RerunEpisodeRecorder(tmp_path, task=episodes.task)
+
+    def writer_stopped(self, **kwargs):
+        raise RuntimeError("File-writer thread shut down prematurely")
+
+    monkeypatch.setattr(rr.RecordingStream, "flush", writer_stopped)
+    with pytest.raises(RerunWriteError, match=r"episode_000000.rrd.partial: Rerun could not write the episode \(File-"):
+        episodes.run(recorder, context)
+    recorder.close()
+    assert list((tmp_path / "rerun").iterdir()) == []
+
+
+def test_rollback_keeps_the_episodes_the_journal_names_and_removes_the_rest(tmp_path):
+    rerun = tmp_path / "rerun"
+    rerun.mkdir()
+    for name in ("episode_000000.rrd", "episode_000002.rrd", "episode_000003.rrd.partial", LAYOUT_FILE):
+        (rerun / name).write_bytes(b"x")
+    episodes, (context,) = Episodes(), contexts(perturbations=())
+    recorder = RerunEpisodeRecorder(tmp_path, task=episodes.task)
+    record, files = episodes.run(recorder, context)
+    recorder.rollback([dataclasses.replace(record, rerun_path=files.rerun_path)])
+    recorder.close()
+    assert sorted(p.name for p in rerun.iterdir()) == ["episode_000000.rrd", LAYOUT_FILE]

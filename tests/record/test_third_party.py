@@ -48,3 +48,14 @@ def test_pyav_decodes_where_torchcodec_cannot_load():
         assert video_backend() == "pyav"
     else:
         assert video_backend() == "torchcodec"
+
+
+def test_a_full_disk_adds_no_warning_line_and_an_unwritable_log_no_traceback(tmp_path, capsys):
+    library = logging.getLogger("somelib.encoder")
+    with third_party_output(tmp_path / "gone"):  # the log file cannot be opened: its folder does not exist
+        library.error("Encoder thread error: [Errno 28] No space left on device: 'x.mp4'")
+        library.warning("something else")
+    err = capsys.readouterr().err
+    assert err.splitlines() == [
+        f"warning (somelib.encoder): something else [full text: {tmp_path / 'gone' / LOG_FILE}]"
+    ]
