@@ -46,6 +46,14 @@ def test_every_grid_combination_of_every_cell_is_a_run_directory_named_by_its_se
     }
 
 
+def test_every_group_of_flags_can_be_written_nested_or_dotted(tmp_path):
+    spec = {"eval": {"policy.type": "oracle", "stop": {"width": 0.3}}, "cells": [{"stop.alpha": 0.1}]}
+    path = write(tmp_path, spec)
+    (cell,) = sweep_cells(path, read_sweep_file(path), tmp_path / "out")
+    assert (cell.config.policy.type, cell.config.stop.width, cell.config.stop.alpha) == ("oracle", 0.3, 0.1)
+    assert cell.name == "stop.alpha=0.1"
+
+
 def test_cell_names_are_filesystem_safe_and_bounded():
     assert cell_name(None, {"policy.path": "user/model v2"}, {"seed": 0}) == "policy.path=user_model_v2,seed=0"
     long = cell_name(None, {"policy.path": "x" * 400}, {})
