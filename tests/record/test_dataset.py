@@ -1,11 +1,13 @@
 """The run's LeRobotDataset: loads with LeRobot, carries the eval columns and sidecar, survives an interruption
 and a resume, and plays with `lerobot-dataset-viz`."""
 
+import dataclasses
 import json
 import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from lerobot.datasets import LeRobotDataset
 
@@ -190,3 +192,49 @@ def test_a_dataset_damaged_while_saving_is_refused_with_advice_not_fetched_from_
     with pytest.raises(DatasetError, match="is damaged .*; move it aside"):
         resumed.start(context, FEATURES, POSE_KEYS)
     resumed.close()
+
+
+def flat_stats(run_dir) -> dict[str, np.ndarray]:
+    stats = json.loads((run_dir / "dataset" / "meta" / "stats.json").read_text())
+    return {
+        f"{feature}/{name}": np.asarray(value) for feature, values in stats.items() for name, value in values.items()
+    }
+
+
+def test_rollback_to_the_journal_drops_later_episodes_and_the_dataset_loads_as_before(tmp_path):
+    episodes, trials = Episodes(), contexts(perturbations=("LB1", "SB1"))
+    recorder = DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID)
+    files = [episode(recorder, episodes, trial) for trial in trials[:2]]
+    recorder.close()
+    before = {name: (tmp_path / "dataset" / "meta" / name).read_bytes() for name in ("info.json", "tasks.parquet")}
+    frames = load(tmp_path).hf_dataset.select_columns(["index", "eval.trial_index", "action"]).to_list()
+    stats = flat_stats(tmp_path)
+    again = DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID)
+    assert episode(again, episodes, trials[2]).dataset_episode == 2  # saved, but its trial never journaled
+    again.close()
+    journaled = [scored(trial, Outcome(True, 4, 0.04, trial.instance.scene, 0.4), 0.0, 0.0) for trial in trials[:2]]
+    journaled = [
+        dataclasses.replace(r, dataset_episode=f.dataset_episode) for r, f in zip(journaled, files, strict=True)
+    ]
+    resumed = DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID)
+    resumed.rollback(journaled)
+    assert {name: (tmp_path / "dataset" / "meta" / name).read_bytes() for name in before} == before
+    assert flat_stats(tmp_path).keys() == stats.keys()
+    assert all(np.allclose(flat_stats(tmp_path)[key], value, rtol=1e-6) for key, value in stats.items())
+    assert load(tmp_path).hf_dataset.select_columns(["index", "eval.trial_index", "action"]).to_list() == frames
+    sidecar = (tmp_path / "dataset" / "meta" / "contrast_eval" / "episodes.jsonl").read_text().splitlines()
+    assert [json.loads(line)["episode_index"] for line in sidecar] == [0, 1]
+    assert episode(resumed, episodes, trials[2]).dataset_episode == 2
+    resumed.close()
+    assert load(tmp_path).num_episodes == 3
+
+
+def test_a_journal_naming_episodes_the_dataset_lacks_is_refused_with_advice(tmp_path):
+    episodes, (context,) = Episodes(), contexts(perturbations=())
+    recorder = DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID)
+    files = episode(recorder, episodes, context)
+    recorder.close()
+    record = scored(context, Outcome(True, 4, 0.04, context.instance.scene, 0.4), 0.0, 0.0)
+    named = [dataclasses.replace(record, dataset_episode=files.dataset_episode + 1)]
+    with pytest.raises(DatasetError, match=r"holds 1 complete episodes of the first 2 that the journal names; move it"):
+        DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID).rollback(named)
