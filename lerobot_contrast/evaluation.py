@@ -135,14 +135,14 @@ def run(evaluation: Evaluation) -> Results:
 
 
 def _continue_from_journal(ev: Evaluation, run_dir: RunDir) -> None:
-    """Check that the journal is this run's, then bring the plan file and the observers' files in line with it."""
+    """Check that the plan and the journal are this run's, then bring the observers' files in line with it."""
     journal = run_dir.journal
     if journal.torn_bytes and ev.verbose:
         print(f"{journal.path}: dropped its last line, cut off mid-write by a kill; that trial runs again")
+    keep_plan(run_dir.path, ev.plan)  # first: an edited config.json gives another plan, and this names it
     journal.check_planned(replay(ev, journal.records), len(ev.plan))
     if ev.rerun_aborted:
         drop_lost_trials(journal, _say if ev.verbose else None)
-    keep_plan(run_dir.path, ev.plan)
     for observer in ev.observers:
         observer.rollback(journal.records)
 

@@ -35,6 +35,10 @@ REQUIRED = (
 # The fields that say which trial a line is: a resumed run's plan must give the same, line by line.
 PLANNED_FIELDS = ("index", "base_id", "perturbation", "family", "staging", "repeat", "instance")
 DAMAGED = "restore journal.jsonl from a backup, or run the evaluation again into a new --output_dir"
+ANOTHER_RUN = (
+    "it comes from another run, or config.json or the journal was edited; restore the run's own config.json and "
+    "journal.jsonl, or run the evaluation again into a new --output_dir"
+)
 
 
 class JournalError(UserError):
@@ -76,13 +80,13 @@ class Journal:
             if differ:
                 raise JournalError(
                     f"{self.path}: line {number} is not trial {want.index} of this run's plan ({', '.join(differ)} "
-                    f"differ): it comes from another run, or config.json or the journal was edited; {DAMAGED}"
+                    f"differ): {ANOTHER_RUN}"
                 )
         if len(self.records) > len(expected):
             beyond = "plan's" if len(expected) == planned else "budget's"
             raise JournalError(
                 f"{self.path}: {len(self.records)} lines, beyond the {beyond} {len(expected)} trials from line "
-                f"{len(expected) + 1}: it comes from another run, or config.json or the journal was edited; {DAMAGED}"
+                f"{len(expected) + 1}: {ANOTHER_RUN}"
             )
 
 
