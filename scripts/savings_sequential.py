@@ -53,7 +53,7 @@ def width_stop(own, cost, draws, width, alpha):
     """Per study: bases and cost until the anytime-valid interval is `width` wide (NaN: not within the draws)."""
     sizes = np.sum(~np.isnan(own), axis=1)
     means = np.nanmean(np.where(sizes[:, None] > 0, own, 0.0), axis=1)
-    cs = ConfidenceSequence(alpha, len(draws))
+    cs = ConfidenceSequence(alpha, len(draws), target_width=width)  # as the monitor under --stop.width
     stop = np.full(len(draws), -1)
     for m in range(draws.shape[1]):
         picked = draws[:, m]

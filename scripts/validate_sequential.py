@@ -31,6 +31,7 @@ MOST_TRIALS = 10  # trials of the largest base a plan can have: the bases' weigh
 EFFICIENCY = 0.8  # mean of Beta(8, 2)
 ALPHA = 0.05
 PERIOD_S = 0.1  # 10 Hz
+WIDTH = 0.1  # the --stop.width whose tuned bets the coverage is measured with
 
 
 def simulate(rng: np.random.Generator, studies: int, bases: int, rate: float, spl: bool):
@@ -55,7 +56,8 @@ def sequential_figures(sizes, a, b, truth: float) -> tuple[float, float]:
     """Time-uniform coverage of the headline sequence, and how often the equal-policy comparison is decided."""
     studies, bases = sizes.shape
     mean_a, mean_b = base_means(sizes, a), base_means(sizes, b)
-    own, difference = ConfidenceSequence(ALPHA, studies), ConfidenceSequence(ALPHA, studies)
+    own = ConfidenceSequence(ALPHA, studies, target_width=WIDTH)  # as the monitor under --stop.width=0.1
+    difference = ConfidenceSequence(ALPHA, studies)
     missed = np.zeros(studies, dtype=bool)
     decided = np.zeros(studies, dtype=bool)
     for j in range(bases):

@@ -31,17 +31,25 @@ class ConfidenceSequence:
     """A running betting confidence sequence at level 1 - `alpha` for `batch` independent streams of values in [0, 1].
 
     `update` adds one value per stream (NaN: no value for that stream this round); `low` and `high` hold the
-    interval, valid simultaneously at every number of updates. With `horizon` (the number of units, fixed in
-    advance), the interval is valid only after that many updates, and narrower there.
+    interval, valid simultaneously at every number of updates. Any predictable bets keep that validity (Ville's
+    inequality); their size decides where the interval is narrow. By default the bets spread over all times
+    (t log t); with `horizon` (a number of units fixed in advance: the paper's confidence interval) they are tuned to
+    that many units; with `target_width` to the number of units at which an interval of that width is expected,
+    8 log(2/alpha) sigma^2 / width^2, estimated from the values so far.
     """
 
     def __init__(
-        self, alpha: float, batch: int = 1, grid_points: int = GRID_POINTS, horizon: int | None = None
+        self,
+        alpha: float,
+        batch: int = 1,
+        grid_points: int = GRID_POINTS,
+        horizon: int | None = None,
+        target_width: float | None = None,
     ) -> None:
         if not 0.0 < alpha < 1.0:
             raise ValueError(f"alpha must be in (0, 1), got {alpha}")
         self.alpha = alpha
-        self.horizon = horizon
+        self.horizon, self.target_width = horizon, target_width
         self.grid = np.linspace(0.0, 1.0, grid_points)
         self.step = 1.0 / (grid_points - 1)
         self.n = np.zeros(batch)
@@ -61,7 +69,7 @@ class ConfidenceSequence:
             raise ValueError("values must lie in [0, 1]")
         t = self.n + 1.0
         variance = self.squares / t  # sigma_hat^2_{t-1}: the (t-1) values seen so far plus the prior 1/4
-        spread = t * np.log1p(t) if self.horizon is None else float(self.horizon)
+        spread = self._spread(t, variance)
         bet = np.sqrt(2.0 * math.log(2.0 / self.alpha) / (variance * spread))
         bet /= (1.0 + self.weights) / t  # the bet on w (x - m): scaled by the mean weight so far (prior 1)
         w = np.broadcast_to(np.asarray(weight, dtype=np.float64), self.n.shape)[:, None]
@@ -80,6 +88,14 @@ class ConfidenceSequence:
         estimate = (0.5 + self.total) / (self.n + 1.0)  # mu_hat_t, including this value
         self.squares += np.where(has, (np.where(has, x, 0.0) - estimate) ** 2, 0.0)
         self._narrow(has)
+
+    def _spread(self, t: np.ndarray, variance: np.ndarray) -> np.ndarray:
+        """The number of units the bets are tuned for (the bet falls with its square root)."""
+        if self.horizon is not None:
+            return np.full_like(t, float(self.horizon))
+        if self.target_width is not None:
+            return np.maximum(t, 8.0 * math.log(2.0 / self.alpha) * variance / self.target_width**2)
+        return t * np.log1p(t)
 
     def _narrow(self, updated: np.ndarray) -> None:
         """Intersect the interval with the grid points still plausible (widened by one grid step, since the

@@ -82,7 +82,7 @@ class Monitor:
         self.remaining = dict(zip(*np.unique([t.base.id for t in counted], return_counts=True), strict=True))
         self.most_trials = float(max(self.remaining.values(), default=1))
         self.open: dict[str, list[tuple[float, float | None]]] = {}
-        self.interval = ConfidenceSequence(rule.alpha)
+        self.interval = ConfidenceSequence(rule.alpha, target_width=rule.width)  # bets tuned to reach the width
         self.difference = ConfidenceSequence(rule.alpha) if rule.reference is not None else None
         self.sums: list[float] = []  # per complete base: sum of its values and number, for the fixed-n interval
         self.sizes: list[float] = []

@@ -102,3 +102,18 @@ def test_alpha_outside_the_unit_interval_is_refused(alpha):
 def test_values_outside_the_unit_interval_are_refused():
     with pytest.raises(ValueError, match=r"\[0, 1\]"):
         ConfidenceSequence(0.05).update(1.5)
+
+
+@pytest.mark.slow
+def test_bets_tuned_to_a_target_width_still_cover_at_every_time_and_reach_it_sooner():
+    rng = np.random.default_rng(5)
+    draw = lambda r, b: ((r.random(b) < 0.4).astype(float),)  # noqa: E731
+    _, lows, highs = run_streams(rng, draw, 500, 400, target_width=0.2)
+    _, plain_lows, plain_highs = run_streams(rng, draw, 500, 400)
+    assert np.mean(((lows > 0.4) | (highs < 0.4)).any(axis=0)) <= 0.05
+
+    def first(lo, hi):  # the first update with the interval 0.2 wide (the number of updates where never)
+        reached = hi - lo <= 0.2
+        return np.where(reached.any(axis=0), np.argmax(reached, axis=0), len(reached))
+
+    assert np.median(first(lows, highs)) < np.median(first(plain_lows, plain_highs))
