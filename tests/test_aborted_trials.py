@@ -68,6 +68,13 @@ def test_an_aborted_trial_is_said_and_counted_as_aborted(tmp_path):
     assert table[-1].split()[:5] == ["all", "2", "0", "1", "0"]
 
 
+def test_a_table_without_aborted_or_skipped_trials_leaves_their_columns_out(tmp_path):
+    run(evaluation(tmp_path / "run", pusher()))
+    table = format_summary(summary(tmp_path / "run"), "m").splitlines()
+    assert table[0].split()[:4] == ["perturbation", "trials", "n/a", "success"]
+    assert "aborted" not in table[0] and "skipped" not in table[0]
+
+
 def test_the_console_says_aborted_and_skipped_apart_from_not_applicable(tmp_path):
     done = run(evaluation(None, pusher())).records[0]
     aborted = replace(done, status="aborted", steps=4, extra={"ended_by": "disconnected"})

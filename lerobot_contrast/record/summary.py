@@ -62,29 +62,30 @@ def _fmt(value: float | None, pattern: str = "{:.3f}") -> str:
 
 
 def format_summary(summary: dict[str, Any], unit: str) -> str:
-    """A plain-text table: one row per perturbation (the original instances first), then the total."""
-    header = (
-        f"{'perturbation':<14}{'trials':>7}{'n/a':>6}{'aborted':>9}{'skipped':>9}{'success':>9}{'SPL':>8}"
-        f"{'cost (' + unit + ')':>12}"
-    )
-    lines = [header, "-" * len(header)]
+    """A plain-text table: one row per perturbation (the original instances first), then the total. The aborted
+    and skipped columns appear when some trial was aborted or skipped (never in a simulator)."""
     rows = summary["per_perturbation"]
-    names = [ORIGINAL] + [name for name in rows if name != ORIGINAL]
-    for name in names:
-        if name not in rows:
-            continue
-        label = perturbation_label(None if name == ORIGINAL else name)
-        s = rows[name]
-        lines.append(
-            f"{label:<14}{s['trials']:>7}{s['not_applicable']:>6}{s['aborted']:>9}{s['skipped']:>9}"
-            f"{_fmt(s['success_rate']):>9}"
-            f"{_fmt(s['spl']):>8}{_fmt(s['cost'], '{:.2f}'):>12}"
-        )
+    names = list(dict.fromkeys(name for name in [ORIGINAL, *rows] if name in rows))  # the originals first
     total = summary["overall"]
-    lines.append("-" * len(header))
-    lines.append(
-        f"{'all':<14}{total['trials']:>7}{total['not_applicable']:>6}{total['aborted']:>9}{total['skipped']:>9}"
-        f"{_fmt(total['success_rate']):>9}"
-        f"{_fmt(total['spl']):>8}{_fmt(total['cumulative_cost'], '{:.2f}'):>12}"
+    counts = ["trials", "not_applicable"] + (["aborted", "skipped"] if total["aborted"] or total["skipped"] else [])
+    widths = {"trials": 7, "not_applicable": 6, "aborted": 9, "skipped": 9}
+    titles = {"not_applicable": "n/a"}
+    header = (
+        f"{'perturbation':<14}"
+        + "".join(f"{titles.get(k, k):>{widths[k]}}" for k in counts)
+        + f"{'success':>9}{'SPL':>8}{'cost (' + unit + ')':>12}"
     )
+
+    def line(label: str, s: dict[str, Any], cost: float | None) -> str:
+        return (
+            f"{label:<14}"
+            + "".join(f"{s[k]:>{widths[k]}}" for k in counts)
+            + f"{_fmt(s['success_rate']):>9}{_fmt(s['spl']):>8}{_fmt(cost, '{:.2f}'):>12}"
+        )
+
+    lines = [header, "-" * len(header)]
+    for name in names:
+        label = perturbation_label(None if name == ORIGINAL else name)
+        lines.append(line(label, rows[name], rows[name]["cost"]))
+    lines += ["-" * len(header), line("all", total, total["cumulative_cost"])]
     return "\n".join(lines)
