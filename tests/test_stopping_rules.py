@@ -88,10 +88,16 @@ def test_a_comparison_stops_once_decided_and_names_the_better_policy(tmp_path):
     assert len(results.records) < len(journal(tmp_path / "weak"))
 
 
-def test_a_comparison_run_with_another_plan_or_task_is_refused_in_one_line(tmp_path):
+def test_a_comparison_run_with_another_plan_or_task_or_unfinished_is_refused_in_one_line(tmp_path):
     evaluate(tmp_path / "other", StopArgs(), mostly, seed=4)
     with pytest.raises(UserError, match=r"--stop.compare: trial 0 differs from .*'s plan"):
         planned_evaluation(EvalConfig(n_instances=40, seed=3, stop=StopArgs(compare=str(tmp_path / "other"))))
+    summary = tmp_path / "other" / "summary.json"
+    finished = summary.read_text()
+    summary.write_text(json.dumps({**json.loads(finished), "complete": False}))
+    with pytest.raises(UserError, match="--stop.compare: .* did not finish"):
+        planned_evaluation(EvalConfig(n_instances=40, seed=4, stop=StopArgs(compare=str(tmp_path / "other"))))
+    summary.write_text(finished)
     config = tmp_path / "other" / "config.json"
     config.write_text(json.dumps({**json.loads(config.read_text()), "task": "vln"}))
     with pytest.raises(UserError, match="--stop.compare: .* evaluated task 'vln', this run 'language_table'"):

@@ -27,6 +27,11 @@ def compare_rule(source: str, plan: list[PlannedTrial], task: str, width: float 
     if theirs.get("task") != task:
         raise StopError(f"--stop.compare: {source} evaluated task {theirs.get('task')!r}, this run {task!r}")
     _check_plan(path, source, plan)
+    summary = _read(path / "summary.json", source) if (path / "summary.json").is_file() else {}
+    if not summary.get("complete", False):
+        raise StopError(
+            f"--stop.compare: {source} did not finish (its summary.json is missing or incomplete); resume it first"
+        )
     records = read_journal(path / "journal.jsonl")
     metric = headline_metric(records)
     return StopRule(width, alpha, reference_values(records, metric), source, metric)
