@@ -121,3 +121,11 @@ def test_report_shows_the_anytime_valid_interval_beside_the_fixed_n_one(tmp_path
     section = text.split("## Sequential stopping", 1)[1].split("\n## ", 1)[0]
     assert "| fixed-n interval | anytime-valid CS |" in section and "at most 0.6 wide" in section
     assert "valid only for a number of bases fixed in advance" in section
+
+
+def test_the_console_shows_both_intervals_labelled_after_each_base(tmp_path, capsys):
+    planned = planned_evaluation(EvalConfig(n_instances=40, seed=3, stop=StopArgs(width=0.6)))
+    run(dataclasses.replace(planned, execute=succeeds(mostly), verbose=True))
+    lines = [line.strip() for line in capsys.readouterr().out.splitlines() if "anytime-valid" in line]
+    assert lines and all(line.startswith("progress: fixed-n 95% [") for line in lines)
+    assert all("| anytime-valid 95% CS [" in line and line.endswith("bases)") for line in lines)
