@@ -72,6 +72,17 @@ class Journal:
             _append_line(self.path, (line + "\n").encode("utf-8"))
             self.records.append(record)
 
+    def truncate(self, keep: int) -> None:
+        """Keep only the first `keep` trials, in the file (one line each) and in `records`."""
+        raw = self.path.read_bytes()
+        end = 0
+        for _ in range(keep):
+            end = raw.index(b"\n", end) + 1
+        with _interrupts_deferred(), self.path.open("r+b") as handle:
+            handle.truncate(end)
+            os.fsync(handle.fileno())
+            del self.records[keep:]
+
     def check_planned(self, expected: Sequence[TrialRecord], planned: int) -> None:
         """Refuse a journal whose lines are not the trials `expected`: the run's plan, replayed with the outcomes
         the journal recorded (`planned` trials in all; fewer are expected where the budget ran out)."""

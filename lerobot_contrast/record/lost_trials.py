@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 
 from lerobot_contrast.record.journal import Journal
@@ -26,14 +25,7 @@ def drop_lost_trials(journal: Journal, say: Callable[[str], None] | None = None)
     if not lost:
         return
     keep = len(journal.records) - lost
-    raw = journal.path.read_bytes()
-    end = 0
-    for _ in range(keep):  # the journal holds one line per trial
-        end = raw.index(b"\n", end) + 1
-    with journal.path.open("r+b") as handle:
-        handle.truncate(end)
-        os.fsync(handle.fileno())
+    trials = ", ".join(str(r.index) for r in journal.records[keep:])
+    journal.truncate(keep)
     if say is not None:
-        trials = ", ".join(str(r.index) for r in journal.records[keep:])
         say(f"trial {trials} was aborted when the robot disconnected; it runs again (--rerun_aborted=false keeps it)")
-    del journal.records[keep:]
