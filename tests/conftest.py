@@ -1,10 +1,16 @@
 """Fixtures shared across the suite."""
 
+import signal
+
 import datasets
 import pytest
 from huggingface_hub import HfFileSystem, constants
 
 from tests.fake_hub import FakeHub
+
+# Ctrl-C is part of what the suite checks. A shell starts background jobs with SIGINT ignored, which Python and the
+# evaluations it spawns would keep; restore Python's own handler so the suite behaves the same however it is started.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture
