@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from lerobot_contrast.contrast.task import Task
+from lerobot_contrast.policies.action_noise import NoisyPolicy
 from lerobot_contrast.policies.base import DEFAULT_POLICY, Builder, Policy, PolicyArgs, PolicyError
 
 if TYPE_CHECKING:
@@ -38,6 +39,7 @@ class PolicyEntry:
     task: str | None = None  # the one task it solves (a scripted baseline reading that task's state); None: any
     reads_images: bool = False  # whether the robot must render its cameras for it
     path: str | None = None  # the LeRobot checkpoint a pretrained entry loads (a directory or a Hub repo id)
+    own_noise: bool = False  # whether its builder applies --policy.noise_std itself
 
     def builder(self) -> Builder:
         module, _, function = self.build.partition(":")
@@ -70,6 +72,7 @@ for _entry in (
         "lerobot_contrast.policies.oracle:build",
         "the scripted push oracle, with privileged block poses",
         task="language_table",
+        own_noise=True,
     ),
     PolicyEntry("random", "lerobot_contrast.policies.scripted:build", "uniform random end-effector deltas"),
     PolicyEntry(
@@ -97,9 +100,16 @@ def make_policy(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[
             f"--rename_map: --policy.type={entry.name} reads the robot's own keys; --rename_map is for a LeRobot "
             "policy (--policy.path or a LeRobot --policy.type)"
         )
+    noisy = args.noise_std > 0 and not entry.own_noise
+    if noisy and entry.build != PRETRAINED_BUILD:
+        raise PolicyError(
+            f"--policy.noise_std: --policy.type={entry.name} takes no action noise; it applies to the oracle "
+            "and to LeRobot policies (the learned default included)"
+        )
     if entry.path is not None:
         args = dataclasses.replace(args, path=entry.path)
-    return entry.builder()(args, robot, task, dict(rename_map or {}))
+    policy = entry.builder()(args, robot, task, dict(rename_map or {}))
+    return NoisyPolicy(policy, args.noise_std) if noisy else policy
 
 
 __all__ = [

@@ -50,7 +50,8 @@ class PolicyArgs:
     device: str | None = None
     # Automatic mixed precision for a LeRobot policy on CUDA.
     use_amp: bool = False
-    # Gaussian noise added to each oracle action, in metres (0 = none).
+    # Gaussian noise added to each action of the oracle or a LeRobot policy (the learned default included), in
+    # the action's units: metres on the simulated tabletop (0 = none). It makes a noisier copy of a policy.
     noise_std: float = 0.0
     # Probability per episode that the oracle ignores a perturbed instruction's words and executes
     # its base instruction instead (0 = reads every instruction).

@@ -57,3 +57,37 @@ def test_a_registered_checkpoint_loads_as_a_lerobot_policy(tmp_path, monkeypatch
         assert set(policy.act(robot.get_observation())) == {"delta_x", "delta_y"}
     finally:
         robot.disconnect()
+
+
+def test_noise_std_makes_a_noisier_copy_of_the_learned_default_drawn_from_the_trial():
+    import lerobot_policy_tabletop_pointer  # noqa: F401  registers the policy type, as eval's plugin discovery does
+
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    task = load_task("language_table")
+    plain = make_policy(PolicyArgs(), robot, task)
+    noisy = make_policy(PolicyArgs(noise_std=0.02), robot, task)
+    robot.connect()
+    try:
+        instance = task.sample(1, np.random.default_rng(0))[0]
+        robot.stage_scene(instance.scene)
+        observation = robot.get_observation()
+
+        def act(policy, seed):
+            context = TrialContext(0, instance, instance, instance.scene, 0.0, "reset", np.random.default_rng(seed), 1)
+            policy.reset(context)
+            return np.array(list(policy.act(observation).values()))
+
+        clean = act(plain, 0)
+        first, again, other = act(noisy, 0), act(noisy, 0), act(noisy, 1)
+    finally:
+        robot.disconnect()
+    assert noisy.name == plain.name == "tabletop_pointer"
+    assert np.array_equal(first, again)  # the trial's own randomness: a resumed trial draws the same noise
+    assert not np.allclose(first, clean) and not np.allclose(first, other)
+    assert np.all(np.abs(first - clean) < 0.1)
+
+
+def test_noise_std_on_a_policy_without_continuous_actions_is_refused_in_one_line():
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    with pytest.raises(PolicyError, match="--policy.type=random takes no action noise"):
+        make_policy(PolicyArgs(type="random", noise_std=0.01), robot, load_task("language_table"))
