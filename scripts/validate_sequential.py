@@ -19,7 +19,12 @@ import time
 
 import numpy as np
 
-from lerobot_contrast.contrast.confseq import ConfidenceSequence, difference_bounds, difference_unit
+from lerobot_contrast.contrast.confseq import (
+    ConfidenceSequence,
+    difference_bounds,
+    difference_sequence,
+    difference_unit,
+)
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.stopping import Monitor, StopRule, excludes_zero, trial_key
@@ -57,7 +62,7 @@ def sequential_figures(sizes, a, b, truth: float) -> tuple[float, float]:
     studies, bases = sizes.shape
     mean_a, mean_b = base_means(sizes, a), base_means(sizes, b)
     own = ConfidenceSequence(ALPHA, studies, target_width=WIDTH)  # as the monitor under --stop.width=0.1
-    difference = ConfidenceSequence(ALPHA, studies)
+    difference = difference_sequence(ALPHA, studies)
     missed = np.zeros(studies, dtype=bool)
     decided = np.zeros(studies, dtype=bool)
     for j in range(bases):

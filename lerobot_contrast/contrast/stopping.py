@@ -17,7 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from lerobot_contrast.contrast.confseq import ConfidenceSequence, difference_bounds, difference_unit
+from lerobot_contrast.contrast.confseq import (
+    ConfidenceSequence,
+    difference_bounds,
+    difference_sequence,
+    difference_unit,
+)
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.intervals import korn_graubard
 from lerobot_contrast.contrast.strategy import PlannedTrial
@@ -83,7 +88,7 @@ class Monitor:
         self.most_trials = float(max(self.remaining.values(), default=1))
         self.open: dict[str, list[tuple[float, float | None]]] = {}
         self.interval = ConfidenceSequence(rule.alpha, target_width=rule.width)  # bets tuned to reach the width
-        self.difference = ConfidenceSequence(rule.alpha) if rule.reference is not None else None
+        self.difference = difference_sequence(rule.alpha) if rule.reference is not None else None
         self.sums: list[float] = []  # per complete base: sum of its values and number, for the fixed-n interval
         self.sizes: list[float] = []
         self.reason: str | None = None

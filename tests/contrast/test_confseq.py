@@ -6,7 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from lerobot_contrast.contrast.confseq import ConfidenceSequence, difference_bounds, difference_unit
+from lerobot_contrast.contrast.confseq import (
+    ConfidenceSequence,
+    difference_bounds,
+    difference_sequence,
+    difference_unit,
+)
+from lerobot_contrast.contrast.stopping import excludes_zero
 
 
 def run_streams(rng, values_of, streams, steps, alpha=0.05, **kwargs):
@@ -117,3 +123,23 @@ def test_bets_tuned_to_a_target_width_still_cover_at_every_time_and_reach_it_soo
         return np.where(reached.any(axis=0), np.argmax(reached, axis=0), len(reached))
 
     assert np.median(first(lows, highs)) < np.median(first(plain_lows, plain_highs))
+
+
+def decided_at(sequence, differences):
+    """Per stream: the first update after which the difference sequence leaves out 0 (-1: never)."""
+    stop = np.full(differences.shape[1], -1)
+    for t, d in enumerate(differences):
+        sequence.update(difference_unit(d, 0.0))
+        stop = np.where((stop < 0) & excludes_zero(*difference_bounds(sequence)), t, stop)
+    return stop
+
+
+def test_the_comparison_decides_a_large_difference_sooner_and_two_equal_policies_rarely():
+    rng = np.random.default_rng(4)
+    streams, steps = 400, 120
+    clear = np.clip(rng.normal(0.4, 0.3, size=(steps, streams)), -1, 1)  # a base's mean paired difference
+    comparison = decided_at(difference_sequence(0.05, streams), clear)
+    interval = decided_at(ConfidenceSequence(0.05, streams), clear)
+    assert (comparison >= 0).all() and comparison.mean() < interval.mean()
+    equal = np.clip(rng.normal(0.0, 0.3, size=(steps, streams)), -1, 1)
+    assert (decided_at(difference_sequence(0.05, streams), equal) >= 0).mean() <= 0.05
