@@ -195,6 +195,7 @@ def equipped(
         resume=cfg.resume,
         rerun_aborted=cfg.rerun_aborted,
         config=config_json(cfg),
+        config_defaults=config_json(EvalConfig()),
         labels={"strategy": cfg.strategy, "policy": cfg.policy.label},
         verbose=True,
     )

@@ -69,6 +69,9 @@ class Evaluation:
     resume: bool = False  # continue the run in `output_dir` from its journal
     rerun_aborted: bool = True  # on resume, run again the last trials a lost robot aborted (False: keep them)
     config: Mapping[str, Any] = field(default_factory=dict)  # written to config.json
+    # Every setting's default, in config.json's form: a setting a run's config.json lacks (it was added after the
+    # run started) counts as its default on resume.
+    config_defaults: Mapping[str, Any] = field(default_factory=dict)
     labels: Mapping[str, Any] = field(default_factory=dict)  # e.g. strategy and policy, for the summary and logs
     verbose: bool = False  # print a line per trial
     stop: StopRule | None = None  # sequential stopping rules, checked after every trial
@@ -128,7 +131,7 @@ def run(evaluation: Evaluation) -> Results:
     path = Path(ev.output_dir)
     with (
         disk_full_said(path, f"resume with --output_dir={path} --resume=true"),
-        open_run_dir(path, dict(ev.config), ev.resume) as run_dir,
+        open_run_dir(path, dict(ev.config), ev.resume, defaults=ev.config_defaults) as run_dir,
     ):
         _continue_from_journal(ev, run_dir)
         return _run(ev, run_dir)

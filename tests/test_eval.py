@@ -175,3 +175,17 @@ def test_the_run_stops_after_the_trial_that_exceeds_the_budget(tmp_path, capsys)
     records = [r for r in journal(run) if r["status"] == "done"]
     assert records[-1]["cumulative_cost"] > 4 and all(r["cumulative_cost"] <= 4 for r in records[:-1])
     assert "stopped at the budget" in capsys.readouterr().out
+
+
+def test_a_run_started_before_a_setting_existed_resumes_with_that_setting_at_its_default(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert main([*SMALL, "--budget=5", f"--output_dir={run}"]) == 0
+    config = json.loads((run / "config.json").read_text())
+    del config["stop"], config["policy"]["language_blind"]  # as an older release wrote it
+    (run / "config.json").write_text(json.dumps(config))
+    before = len(journal(run))
+    assert main([*SMALL, "--budget=6", f"--output_dir={run}", "--resume=true"]) == 2  # a changed setting still is
+    assert "--budget=6.0 (was 5.0)" in capsys.readouterr().err
+    assert main([f"--output_dir={run}", "--resume=true"]) == 0
+    assert main([f"--output_dir={run}", "--resume=true", "--stop.width=0.5"]) == 2
+    assert "--stop=" in capsys.readouterr().err and len(journal(run)) == before

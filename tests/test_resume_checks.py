@@ -123,7 +123,10 @@ def test_a_torn_last_line_is_repaired_said_and_its_trial_run_again(tmp_path, fin
     kept = lines(journal)
     journal.write_text("".join(kept[:-1]) + kept[-1][:40])
     evaluate(run_dir, resume=True)
-    assert f"{journal}: dropped its last line, cut off mid-write by a kill; that trial runs again" in capsys.readouterr().out
+    assert (
+        f"{journal}: dropped its last line, cut off mid-write by a kill; that trial runs again"
+        in capsys.readouterr().out
+    )
     resumed, original = [json.loads(line) for line in lines(journal)], [json.loads(line) for line in kept]
     assert [r["instance"] for r in resumed] == [r["instance"] for r in original]
     assert [r["index"] for r in resumed] == list(range(len(original)))

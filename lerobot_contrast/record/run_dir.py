@@ -6,7 +6,7 @@ from __future__ import annotations
 import errno
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -94,18 +94,38 @@ def comparable_settings(config: dict[str, Any]) -> dict[str, Any]:
     return comparable
 
 
-def open_run_dir(path: Path, config: dict[str, Any], resume: bool, holder: str = "an evaluation") -> RunDir:
-    """Create a new run directory, or reopen one with `resume`, locked for `holder`; refuses anything ambiguous."""
-    return _resume(path, config, holder) if resume else _create(path, config, holder)
+def open_run_dir(
+    path: Path,
+    config: dict[str, Any],
+    resume: bool,
+    holder: str = "an evaluation",
+    defaults: Mapping[str, Any] | None = None,
+) -> RunDir:
+    """Create a new run directory, or reopen one with `resume`, locked for `holder`; refuses anything ambiguous.
+    On resume a setting the stored config.json lacks (one added to the tool since the run started) reads as its
+    value in `defaults`."""
+    if resume:
+        return _resume(path, config, holder, defaults or {})
+    return _create(path, config, holder)
 
 
-def _resume(path: Path, config: dict[str, Any], holder: str) -> RunDir:
+def with_defaults(stored: Mapping[str, Any], defaults: Mapping[str, Any]) -> dict[str, Any]:
+    """`stored`, with each key it lacks (at any depth) taken from `defaults`."""
+    out = dict(defaults) | dict(stored)
+    for key, value in stored.items():
+        if isinstance(value, Mapping) and isinstance(defaults.get(key), Mapping):
+            out[key] = with_defaults(value, defaults[key])
+    return out
+
+
+def _resume(path: Path, config: dict[str, Any], holder: str, defaults: Mapping[str, Any]) -> RunDir:
     config_path = path / "config.json"
     if not config_path.exists():
         raise RunDirError(f"--resume: {path} holds no run to resume (no config.json); drop --resume to start one")
     lock = RunLock.acquire(path, holder)
     try:
-        now, then = comparable_settings(config), comparable_settings(_stored_config(config_path))
+        now = comparable_settings(config)
+        then = comparable_settings(with_defaults(_stored_config(config_path), defaults))
         changed = [
             f"--{k}={json.dumps(now[k])} (was {json.dumps(then.get(k))})" for k in sorted(now) if then.get(k) != now[k]
         ]
