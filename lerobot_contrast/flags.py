@@ -131,7 +131,7 @@ def _describe(value: Any) -> str:
     return str(value).lower() if isinstance(value, bool) else str(value)
 
 
-def _flag_lines(cls: type, prefix: str, skip: tuple[str, ...] = ()) -> list[str]:
+def flag_lines(cls: type, prefix: str, skip: tuple[str, ...] = ()) -> list[str]:
     """One entry per flag: `--name TYPE`, then its comment, with the default unless the comment states it."""
     lines: list[str] = []
     hints = typing.get_type_hints(cls)
@@ -140,7 +140,7 @@ def _flag_lines(cls: type, prefix: str, skip: tuple[str, ...] = ()) -> list[str]
             continue
         default = _default(f)
         if dataclasses.is_dataclass(default):
-            lines += _flag_lines(type(default), f"{prefix}{f.name}.")
+            lines += flag_lines(type(default), f"{prefix}{f.name}.")
             continue
         default = f.metadata.get("help_default", default)  # what None stands for, where that is a name
         doc = get_attribute_docstring(cls, f.name)
@@ -159,11 +159,11 @@ def help_text(cls: type, command: str, robot_type: str | None) -> str:
     from lerobot.robots import RobotConfig
 
     lines = [f"usage: {command} [--flag=value | --flag value] ...", "", (cls.__doc__ or "").strip(), ""]
-    lines += _flag_lines(cls, "", skip=("robot",))
+    lines += flag_lines(cls, "", skip=("robot",))
     known = sorted(RobotConfig.get_known_choices())
     if robot_type in known:
         lines += ["", f"--robot.type={robot_type} settings:"]
-        lines += _flag_lines(RobotConfig.get_choice_class(robot_type), "robot.", skip=("type",))
+        lines += flag_lines(RobotConfig.get_choice_class(robot_type), "robot.", skip=("type",))
     else:
         robot = get_attribute_docstring(cls, "robot").comment_above
         lines += [

@@ -24,9 +24,9 @@ import yaml
 from rich.console import Console
 
 from lerobot_contrast.build import register_robots
-from lerobot_contrast.sweep import SweepConfig, execute
-from lerobot_contrast.sweep_cell import run_cell
-from lerobot_contrast.sweep_file import read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.command import SweepConfig, execute
+from lerobot_contrast.sweep.worker import run_cell
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:

@@ -44,9 +44,9 @@ import numpy as np
 from rich.console import Console
 
 from lerobot_contrast.policies.base import DEFAULT_POLICY
-from lerobot_contrast.sweep import SweepConfig, execute
-from lerobot_contrast.sweep_file import flatten, read_sweep_file, sweep_cells
-from lerobot_contrast.sweep_ray import RayArgs
+from lerobot_contrast.sweep.cells import flatten, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.command import SweepConfig, execute
+from lerobot_contrast.sweep.ray_pool import RayArgs
 
 SWEEP = Path(__file__).with_name("paper_sim.yaml")
 # The paper's Section 5 and appendix: trials at the standard evaluation's cost, and what it found on estimation.

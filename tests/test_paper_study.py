@@ -4,7 +4,7 @@ file expands into valid simulated cells of the learned default, and every design
 import importlib.util
 from pathlib import Path
 
-from lerobot_contrast.sweep_file import read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 

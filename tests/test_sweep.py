@@ -20,8 +20,8 @@ import yaml
 from lerobot_contrast.eval import planned_evaluation
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.report import main as report_main
-from lerobot_contrast.sweep import main
-from lerobot_contrast.sweep_file import read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.command import main
 
 ORACLE = {"max_episode_steps": 30, "rerun": False, "policy": {"type": "oracle"}}
 SMALL = {

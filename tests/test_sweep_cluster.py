@@ -9,7 +9,7 @@ import ray
 import yaml
 from ray.cluster_utils import Cluster
 
-from lerobot_contrast.sweep import main
+from lerobot_contrast.sweep.command import main
 
 SPEC = {
     "eval": {"n_instances": 3, "max_episode_steps": 30, "rerun": False, "policy": {"type": "oracle"}},

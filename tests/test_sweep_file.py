@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from lerobot_contrast.sweep import main
-from lerobot_contrast.sweep_file import cell_name, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import cell_name, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.command import main
 
 SMALL = {
     "eval": {"n_instances": 2, "max_episode_steps": 20, "rerun": False, "policy": {"type": "oracle"}},

@@ -13,8 +13,8 @@ import ray
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from lerobot_contrast.sweep_cell import CellOutcome, run_cell, wants_gpu
-from lerobot_contrast.sweep_file import Cell
+from lerobot_contrast.sweep.cells import Cell
+from lerobot_contrast.sweep.worker import CellOutcome, run_cell, wants_gpu
 
 POLL_S = 0.5
 # Each cell runs on one thread: the cells are the parallelism. Set when the worker process starts, before its

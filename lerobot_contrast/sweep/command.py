@@ -13,12 +13,12 @@ from rich.console import Console
 from lerobot_contrast.config import ConfigError
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.eval import planned_evaluation
-from lerobot_contrast.flags import _flag_lines, join_values, parse_config, wants_help
+from lerobot_contrast.flags import flag_lines, join_values, parse_config, wants_help
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.sweep_dir import is_complete, is_sweep_dir, write_index, write_sweep_results
-from lerobot_contrast.sweep_cell import CellOutcome
-from lerobot_contrast.sweep_file import Cell, read_sweep_file, sweep_cells
-from lerobot_contrast.sweep_ray import RayArgs, run_cells, start_ray
+from lerobot_contrast.sweep.cells import Cell, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.ray_pool import RayArgs, run_cells, start_ray
+from lerobot_contrast.sweep.worker import CellOutcome
 
 COMMAND = "python -m lerobot_contrast.sweep SWEEP.yaml"
 
@@ -151,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
         argv = sweep_args(join_values(list(sys.argv[1:] if argv is None else argv)))
         if wants_help(argv):
             lines = [f"usage: {COMMAND} [--flag=value | --flag value] ...", "", SweepConfig.__doc__ or "", ""]
-            print("\n".join(lines + _flag_lines(SweepConfig, "")))
+            print("\n".join(lines + flag_lines(SweepConfig, "")))
             return 0
         return run_sweep(parse_config(SweepConfig, argv), console)
     except KeyboardInterrupt:
@@ -162,7 +162,3 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())
