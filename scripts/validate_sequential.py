@@ -1,6 +1,6 @@
 """Validity of the sequential statistics on simulated clustered studies (issue 20).
 
-For binary and SPL-like outcomes, 30 and 100 base instances, and success rates near 0.5 and 0.03, it simulates
+For binary and SPL-like outcomes, 10, 30 and 100 base instances, and success rates near 0.5 and 0.03, it simulates
 --studies studies and measures: how often the anytime-valid confidence sequence covers the true mean at every base
 (goal >= 95%), how often the fixed-n interval of the report covers it (goal >= 94%; the cluster bootstrap it
 replaced alongside), and how often --stop.compare declares two equal policies different at any trial (goal <= 5%).
@@ -116,7 +116,7 @@ def main() -> None:
     figures: dict[str, float] = {}
     print(f"{'outcome':<8}{'bases':>6}{'rate':>6}{'CS cover':>10}{'fixed-n':>9}{'bootstrap':>10}{'compare FP':>11}")
     for spl in (False, True):
-        for bases in (30, 100):
+        for bases in (10, 30, 100):
             for rate in (0.5, 0.03):
                 sizes, a, b = simulate(rng, args.studies, bases, rate, spl)
                 truth = rate * EFFICIENCY if spl else rate
