@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from lerobot.robots import Robot
 
 # The robot each task runs on when no --robot is given: an in-process simulator.
-TASK_ROBOTS = {"language_table": "language_table_sim", "vln": "vln_sim"}
+TASK_ROBOTS = {"language_table": "language_table_sim", "vln": "vln_sim", "vln_paper": "vln_sim"}
 OPERATORS = ("auto", "console")
 DEFAULT_HARDWARE_FPS = 10.0
 

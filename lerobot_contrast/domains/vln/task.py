@@ -11,7 +11,7 @@ from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.task import Judgement, Task
-from lerobot_contrast.domains.vln import routes
+from lerobot_contrast.domains.vln import routes, sampler
 from lerobot_contrast.domains.vln.apartment import Route, resample
 from lerobot_contrast.domains.vln.examples import FAMILY, example_instances, storage_scene
 from lerobot_contrast.domains.vln.perturbations import PERTURBATIONS
@@ -25,11 +25,13 @@ JUDGE_SPACING_M = 0.05
 
 class VLNTask(Task):
     """Follow "go past X, then stop at Y" in the apartment: progress 0.5 for reaching X, 1.0 for stopping at Y
-    after it; success is full progress. SPL and nDTW compare the path with the shortest route on the grid."""
+    after it; success is full progress. SPL and nDTW compare the path with the shortest route on the grid.
+
+    Instances are i.i.d. furniture arrangements from the evaluation split of `sampler` (training never sees one)."""
 
     name = "vln"
     outcome = "subgoals"
-    default_instances = 5  # one per shipped furniture arrangement, as in the paper
+    default_instances = 100
 
     def __init__(self, families: Sequence[str] | None = None, radius: float = SUCCESS_RADIUS_M) -> None:
         unknown = [f for f in families or () if f != FAMILY]
@@ -42,13 +44,8 @@ class VLNTask(Task):
             self.perturbations.add(perturbation)
 
     def sample(self, n: int, rng: np.random.Generator) -> list[Instance]:
-        """`n` of the shipped instances (one per furniture arrangement), in a random order."""
-        if not 1 <= n <= len(self.examples):
-            raise UserError(
-                f"--n_instances: the VLN example set has {len(self.examples)} instances (one per furniture "
-                f"arrangement); use --n_instances between 1 and {len(self.examples)}, got {n}"
-            )
-        return [self.examples[int(i)] for i in rng.permutation(len(self.examples))[:n]]
+        """`n` arrangements of the evaluation split, from a seed stream drawn from `rng`."""
+        return sampler.sample_arrangements(n, "eval", int(rng.integers(2**31)), self.radius)
 
     def storage_scene(self) -> Scene:
         return storage_scene()
@@ -118,3 +115,19 @@ class VLNTask(Task):
                 return k
             first += int(hits[0])
         return len(passing) + int(routes.distance_to_object(instance.scene, last, points[-1:])[0] <= radius)
+
+
+class VLNPaperTask(VLNTask):
+    """The paper's design: the five participants' arrangements (`examples.ARRANGEMENTS`), one instance each."""
+
+    name = "vln_paper"
+    default_instances = 5
+
+    def sample(self, n: int, rng: np.random.Generator) -> list[Instance]:
+        """`n` of the shipped instances (one per furniture arrangement), in a random order."""
+        if not 1 <= n <= len(self.examples):
+            raise UserError(
+                f"--n_instances: the VLN paper set has {len(self.examples)} instances (one per furniture "
+                f"arrangement); use --n_instances between 1 and {len(self.examples)}, got {n}"
+            )
+        return [self.examples[int(i)] for i in rng.permutation(len(self.examples))[:n]]

@@ -79,7 +79,7 @@ sys.exit(code)
 
 
 def test_the_eval_cli_runs_vln_in_simulation_with_the_locobot_plugin_unimportable(tmp_path):
-    flags = ["--task=vln", "--policy.type=route_follower", "--n_instances=1", "--perturbations=[L,SB]",
+    flags = ["--task=vln_paper", "--policy.type=route_follower", "--n_instances=1", "--perturbations=[L,SB]",
              "--rerun=false", "--max_episode_steps=150", f"--output_dir={tmp_path / 'run'}"]  # fmt: skip
     done = subprocess.run([sys.executable, "-c", BLOCKED, *flags], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]

@@ -17,7 +17,7 @@ from lerobot_contrast.domains.vln.wording import name_of
 
 @pytest.fixture(scope="module")
 def task() -> VLNTask:
-    return load_task("vln")
+    return load_task("vln_paper")
 
 
 def test_the_shipped_set_is_five_arrangements_with_two_subgoal_instructions(task):
