@@ -1,22 +1,20 @@
-"""Every command in the README's shell blocks stays true: each `python -m` module runs, as a dry run or `--help`."""
+"""Every command in the shell blocks of the README and the documentation stays true: each `python -m` module runs,
+as a dry run or `--help`."""
 
 import re
 import runpy
 import shlex
 import sys
-from pathlib import Path
 
 import pytest
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-TEXT = README.read_text(encoding="utf-8")
+from tests.docs_pages import ROOT, code_blocks
 
 
 def shell_commands() -> list[list[str]]:
-    """The README's bash blocks as commands split into words: continuations joined, comments and placeholders
+    """The pages' bash blocks as commands split into words: continuations joined, comments and placeholders
     (`<...>`, `[...]`, `...`) dropped, `a && b` as two commands."""
-    blocks = re.findall(r"^ *```bash\n(.*?)^ *```", TEXT, flags=re.S | re.M)
-    lines = "\n".join(blocks).replace("\\\n", " ").splitlines()
+    lines = "\n".join(code_blocks("bash")).replace("\\\n", " ").splitlines()
     commands = []
     for line in lines:
         words = [
@@ -41,23 +39,23 @@ def as_check(module: str, args: list[str]) -> list[str]:
     return ["--help"]
 
 
-def test_every_python_command_in_the_readme_uses_the_virtual_environment():
+def test_every_python_command_in_the_docs_uses_the_virtual_environment():
     bare = [c for c in shell_commands() if "python" in c[0] and c[0] != ".venv/bin/python" and c[1:3] != ["-m", "venv"]]
     assert not bare, f"commands outside .venv/bin/python: {bare}"
 
 
-def test_the_readme_names_the_commands_it_should():
+def test_the_docs_name_the_commands_they_should():
     modules = {command[0] for command in python_commands()}
     assert {"lerobot_contrast.eval", "lerobot_contrast.review", "lerobot_contrast.report"} <= modules
-    assert "lerobot_robot_locobot.host" in modules
+    assert {"lerobot_contrast.publish", "lerobot_contrast.sweep", "lerobot_robot_locobot.host"} <= modules
 
 
 @pytest.mark.parametrize("command", python_commands(), ids=lambda c: " ".join(c)[:80])
-def test_each_readme_command_runs_in_dry_run_or_help_form(command, tmp_path, monkeypatch, capsys):
+def test_each_command_runs_in_dry_run_or_help_form(command, tmp_path, monkeypatch, capsys):
     module, args = command[0], as_check(command[0], command[1:])
     monkeypatch.chdir(tmp_path)
-    yaml_blocks = re.findall(r"```yaml\n(.*?)```", TEXT, flags=re.S)
-    (tmp_path / "my_table.yaml").write_text(yaml_blocks[0], encoding="utf-8")  # the README's complete task file
+    task_file = next(b for b in code_blocks("yaml", [ROOT / "docs" / "tasks.md"]) if "name: my_table" in b)
+    (tmp_path / "my_table.yaml").write_text(task_file, encoding="utf-8")  # the docs' complete task file
     monkeypatch.setattr(sys, "argv", [module, *args])
     with pytest.raises(SystemExit) as exited:
         runpy.run_module(module, run_name="__main__", alter_sys=True)

@@ -1,15 +1,14 @@
-"""The README's "Write your own task" example must run as written."""
+"""The Python examples of the README and the documentation run as written, through the public API only."""
 
-import re
 import runpy
-from pathlib import Path
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+from tests.docs_pages import ROOT, code_blocks
+
+TASKS_PAGE = ROOT / "docs" / "tasks.md"
 
 
 def test_the_custom_task_example_runs_and_honours_the_budget(tmp_path, capsys):
-    blocks = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
-    example = next(b for b in blocks if "class CupTask" in b)
+    example = next(b for b in code_blocks("python", [TASKS_PAGE]) if "class CupTask" in b)
     script = tmp_path / "example.py"
     script.write_text(example, encoding="utf-8")
     runpy.run_path(str(script), run_name="__main__")
@@ -22,6 +21,10 @@ def test_the_custom_task_example_runs_and_honours_the_budget(tmp_path, capsys):
 
 
 def test_the_python_examples_use_only_the_public_api():
-    blocks = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
-    imports = re.findall(r"^(?:from|import) (lerobot_contrast\S*)", "\n".join(blocks), flags=re.M)
+    imports = [
+        line.split()[1]
+        for block in code_blocks("python")
+        for line in block.splitlines()
+        if line.startswith(("from lerobot_contrast", "import lerobot_contrast"))
+    ]
     assert imports and set(imports) == {"lerobot_contrast"}

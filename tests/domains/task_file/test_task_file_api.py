@@ -1,4 +1,4 @@
-"""The README's "Write your own task" example (a task file and the Python API in a few lines) runs as written."""
+"""The documentation's "Write your own task" example (a task file and the Python API in a few lines) runs as written."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import re
 import runpy
 from pathlib import Path
 
-README = Path(__file__).resolve().parents[3] / "README.md"
-BLOCKS = re.findall(r"```(yaml|python)\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
+TASKS_PAGE = Path(__file__).resolve().parents[3] / "docs" / "tasks.md"
+BLOCKS = re.findall(r"```(yaml|python)\n(.*?)```", TASKS_PAGE.read_text(encoding="utf-8"), flags=re.S)
 MY_TABLE = next(code for kind, code in BLOCKS if kind == "yaml" and "name: my_table" in code)
 EXAMPLE = next(code for kind, code in BLOCKS if kind == "python" and 'load_task("my_table.yaml")' in code)
 
