@@ -95,6 +95,9 @@ class EvalConfig:
     rerun_aborted: bool = True
     # Print the plan (trials, what to move before each, planned cost) and exit without running anything.
     dry_run: bool = False
+    # Simulated trials run side by side, the policy answering every lane in one call, with the same results as
+    # one lane: a number, or auto (8 for a policy that batches lanes, else 1); always 1 on hardware.
+    lanes: str = "auto"
     # Stopping rules: --stop.width=0.1, --stop.compare=RUN_DIR|hub:USER/NAME, --stop.alpha=0.05.
     stop: StopArgs = field(default_factory=StopArgs)
 
@@ -113,7 +116,7 @@ def resume_args(argv: list[str]) -> list[str]:
 
 
 # Choices of one session that a resumed run may make differently, so they are not stored in config.json.
-SESSION_CHOICES = ("rerun_aborted",)
+SESSION_CHOICES = ("rerun_aborted", "lanes")
 
 
 def config_json(config: Any) -> dict[str, Any]:

@@ -30,6 +30,7 @@ from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.evaluation import Evaluation, check_budget, preview, run
 from lerobot_contrast.flags import help_text, join_values, parse_config, robot_type, wants_help
+from lerobot_contrast.lanes.choice import choose_lanes, parse_lanes, use_threads
 from lerobot_contrast.operator_console import OperatorConsole, SessionStopped
 from lerobot_contrast.policies import Policy, make_policy
 from lerobot_contrast.record.compare_run import compare_rule
@@ -65,6 +66,7 @@ def validate(cfg: EvalConfig) -> None:
     if cfg.operator is not None and cfg.operator not in OPERATORS:
         raise ConfigError(f"--operator: unknown mode {cfg.operator!r}; choose from: {', '.join(OPERATORS)}")
     _check_policy_args(cfg)
+    parse_lanes(cfg.lanes)
     _check_run_dir(cfg)
     if cfg.push_to_hub and cfg.repo_id is None:
         raise ConfigError("--push_to_hub needs --repo_id=USER/NAME naming the Hub dataset repo to publish to")
@@ -198,6 +200,8 @@ def equipped(
         config_defaults=config_json(EvalConfig()),
         labels={"strategy": cfg.strategy, "policy": cfg.policy.label},
         verbose=True,
+        lanes=choose_lanes(cfg.lanes, robot, policy, operator=operator is not None, fps=run_fps(cfg, robot)),
+        policy_for=lambda lane_robot: make_policy(cfg.policy, lane_robot, planned.task, cfg.rename_map),
     )
 
 
@@ -214,6 +218,7 @@ def plan_and_run(cfg: EvalConfig) -> int:
     connect(robot)
     try:
         operator = make_operator(cfg, robot, task, planned.cost_model.unit)
+        use_threads()  # chosen, not inherited from the machine (lanes/choice.py)
         policy = make_policy(cfg.policy, robot, task, cfg.rename_map)  # one that cannot load leaves no run directory
         cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
         return run_and_report(cfg, equipped(cfg, planned, robot, policy, operator))

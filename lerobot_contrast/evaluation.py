@@ -76,6 +76,8 @@ class Evaluation:
     verbose: bool = False  # print a line per trial
     stop: StopRule | None = None  # sequential stopping rules, checked after every trial
     adaptive: bool = False  # --order=adaptive: each next trial is chosen from the outcomes so far (adaptive.py)
+    lanes: int = 1  # simulated chains of trials run side by side (lanes/), with the same results as one
+    policy_for: Callable[[Any], Policy] | None = None  # the policy for another lane's robot (None: a copy)
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -163,9 +165,11 @@ def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
         monitor.observe(record)
     quiet = nullcontext() if run_dir is None else third_party_output(run_dir.path)
     with quiet:
+        execute = None
         try:
             watching = ev.observers if ev.execute is None else ()  # observers watch the episodes a RobotRunner runs
-            executed = trials(ev, state, _executor(ev), watching)
+            execute = _executor(ev, state)
+            executed = trials(ev, state, execute, watching)
             for record in executed if monitor is None else _sequential(ev, monitor, executed):
                 if run_dir is None:
                     records.append(record)
@@ -175,6 +179,7 @@ def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
                     print(trial_line(record, ev.cost_model.unit), flush=True)
             complete = True
         finally:
+            getattr(execute, "close", lambda: None)()
             stopping = None if monitor is None else monitor.report(planned_end=complete)
             summary = summarize(records, settings=ev.settings, complete=complete, stopping=stopping)
             try:
@@ -231,20 +236,33 @@ def _recorded(record: TrialRecord, context: TrialContext) -> Outcome:
     )
 
 
-def _executor(ev: Evaluation) -> Execute:
+def _executor(ev: Evaluation, state: LoopState) -> Execute:
     if ev.execute is not None:
         return ev.execute
     if ev.robot is None or ev.policy is None:
         raise UserError("an Evaluation needs a robot and a policy, or `execute` to run each trial")
+    if ev.lanes > 1 and ev.operator is None and not ev.adaptive and getattr(ev.robot, "simulated", False):
+        from lerobot_contrast.lanes.runner import LaneRunner
+
+        return LaneRunner(
+            ev.task, ev.plan[state.next_index :], ev.seed, (state.scene, state.previous), ev.robot, ev.lanes,
+            ev.policy, lambda robot, seat, observers: _runner(ev, robot, seat, observers),
+            lambda trial, staged, scene: _context(ev, trial, staged, scene),
+            ev.observers, ev.policy_for,
+        )  # fmt: skip
+    return _runner(ev, ev.robot, ev.policy, ev.observers)
+
+
+def _runner(ev: Evaluation, robot: Robot, policy: Policy, observers: Sequence[EpisodeObserver]) -> RobotRunner:
     return RobotRunner(
-        ev.robot,
-        ev.policy,
+        robot,
+        policy,
         ev.task,
         operator=ev.operator,
         fps=ev.fps,
         max_steps=ev.max_steps,
         max_episode_s=ev.max_episode_s,
-        observers=ev.observers,
+        observers=observers,
         cost_unit=ev.cost_model.unit,
         say=_say if ev.verbose else None,
     )
@@ -300,19 +318,7 @@ def trials(
         if staged.instance is None:
             yield _not_applicable(trial, ev.task, state.cumulative_cost)
             continue
-        context = TrialContext(
-            index=trial.index,
-            instance=staged.instance,
-            base=trial.base,
-            current=state.scene,
-            planned_cost=ev.cost_model(state.scene, staged.instance.scene),
-            staging=staged.staging,
-            rng=np.random.default_rng([ev.seed, trial.index, 1]),
-            planned_trials=len(ev.plan),
-            axis=_axis(ev.task, trial.perturbation),
-            settings=settings,
-            repeat=trial.repeat,
-        )
+        context = _context(ev, trial, staged, state.scene, settings)
         started_at = datetime.now(UTC).isoformat(timespec="seconds")
         outcome = execute(context)
         cost = context.planned_cost if outcome.cost is None else outcome.cost
@@ -324,6 +330,25 @@ def trials(
         record = scored(context, outcome, cost, state.cumulative_cost, started_at)
         state.history.append(record)
         yield _observed(record, observers) if outcome.status in STAGED else record
+
+
+def _context(
+    ev: Evaluation, trial: PlannedTrial, staged: Staged, current: Scene, settings: dict[str, Any] | None = None
+) -> TrialContext:
+    """What the runner and the observers know of `trial`, staged as `staged` from the scene `current`."""
+    return TrialContext(
+        index=trial.index,
+        instance=staged.instance,
+        base=trial.base,
+        current=current,
+        planned_cost=ev.cost_model(current, staged.instance.scene),
+        staging=staged.staging,
+        rng=np.random.default_rng([ev.seed, trial.index, 1]),
+        planned_trials=len(ev.plan),
+        axis=_axis(ev.task, trial.perturbation),
+        settings=ev.settings if settings is None else settings,
+        repeat=trial.repeat,
+    )
 
 
 def _upcoming(ev: Evaluation, state: LoopState) -> Iterator[PlannedTrial]:

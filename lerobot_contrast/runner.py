@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Generator, Sequence
 from contextlib import suppress
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from lerobot.utils.robot_utils import precise_sleep
@@ -84,6 +84,11 @@ class RobotRunner:
         self._halt: Exception | None = None
 
     def __call__(self, context: TrialContext) -> Outcome:
+        return drive(self.trial(context), self.policy.act)
+
+    def trial(self, context: TrialContext) -> Generator[dict[str, Any], dict[str, Any], Outcome]:
+        """The trial as a generator: it yields each observation the policy must answer, is sent the action, and
+        returns the outcome, so that a caller can step many trials side by side (lanes.py)."""
         if self._halt is not None:
             raise self._halt
         while True:
@@ -92,7 +97,7 @@ class RobotRunner:
                 raise SessionStopped("the operator stopped the session")
             if staging.action == "skip":
                 return _skipped(context)
-            episode = self._run_episode(context)
+            episode = yield from self._run_episode(context)
             if episode.ended_by in ABORTS:
                 return self._aborted(context, staging, episode)
             scene_after = self._scene_after(context, episode)
@@ -104,7 +109,12 @@ class RobotRunner:
             if label.action == "skip":
                 return _skipped(context)
             if label.action == "stop":
-                raise SessionStopped("the operator stopped the session")
+                raise SessionStopped(
+                    f"the operator stopped the session before labelling trial {context.index + 1}, which is not "
+                    "recorded and runs again on resume"
+                )
+            # A redo is staged from where this attempt left things, so the console lists the moves from there.
+            context = replace(context, current=scene_after)
 
     def _stage(self, context: TrialContext) -> Staging:
         staging = Staging("ready") if self.operator is None else self.operator.stage(context)
@@ -112,7 +122,7 @@ class RobotRunner:
             self.robot.stage_scene(context.instance.scene)
         return staging
 
-    def _run_episode(self, context: TrialContext) -> Episode:
+    def _run_episode(self, context: TrialContext) -> Generator[dict[str, Any], dict[str, Any], Episode]:
         self.policy.reset(context)
         features = {"observation": self.robot.observation_features, "action": self.robot.action_features}
         for observer in self.observers:
@@ -129,7 +139,7 @@ class RobotRunner:
                 ended_by = self._interrupted(tick - start, observation)
                 if ended_by is not None:
                     break
-                sent = self.robot.send_action(self.policy.act(observation))
+                sent = self.robot.send_action((yield observation))
                 for observer in self.observers:
                     observer.step(tick - start, observation, sent)
                 steps += 1
@@ -274,6 +284,21 @@ class RobotRunner:
             if staging.moved is not None:
                 extra["moved_reported"] = staging.moved
         return extra
+
+
+def drive(trial: Generator[dict[str, Any], dict[str, Any], Outcome], act: Callable[[dict[str, Any]], dict]) -> Outcome:
+    """Run a trial generator to its end, answering each observation with `act`."""
+    try:
+        observation = next(trial)
+        while True:
+            try:
+                action = act(observation)
+            except Exception as error:  # raised where the policy is asked, as if called inside the episode
+                observation = trial.throw(error)
+                continue
+            observation = trial.send(action)
+    except StopIteration as end:
+        return end.value
 
 
 def _skipped(context: TrialContext) -> Outcome:

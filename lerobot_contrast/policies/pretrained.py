@@ -8,7 +8,8 @@ is refused up front, with the keys to map through `--rename_map`.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -17,7 +18,7 @@ from lerobot.common.control_utils import predict_action
 from lerobot.configs import PreTrainedConfig
 from lerobot.configs.types import FeatureType
 from lerobot.policies import get_policy_class, make_policy_config, make_pre_post_processors
-from lerobot.policies.utils import make_robot_action
+from lerobot.policies.utils import make_robot_action, prepare_observation_for_inference
 from lerobot.utils.feature_utils import build_dataset_frame, dataset_to_policy_features, hw_to_dataset_features
 
 from lerobot_contrast.contrast.task import Task
@@ -188,14 +189,23 @@ class PretrainedPolicy:
         self.device = torch.device(config.device)
         self.use_amp = use_amp
         self.instruction = ""
+        self.memory: dict[str, Any] = {}  # the episode's own state, for a policy that batches lanes
+
+    @property
+    def batches_lanes(self) -> bool:
+        """Whether the policy keeps each episode's memory apart, so one call can step many episodes (lanes)."""
+        return hasattr(self.policy, "lane_step")
 
     def reset(self, context: TrialContext) -> None:
         self.instruction = context.instance.instruction
+        self.memory = {}
         self.policy.reset()
         self.preprocessor.reset()
         self.postprocessor.reset()
 
     def act(self, observation: Mapping[str, Any]) -> dict[str, float]:
+        if self.batches_lanes:  # the lanes' own path, so one lane and many give the same actions
+            return self.act_lanes([observation], [self.instruction], [self.memory])[0]
         frame = build_dataset_frame(self.features, dict(observation), prefix="observation")
         action = predict_action(
             frame,
@@ -208,3 +218,21 @@ class PretrainedPolicy:
             robot_type=self.robot_type,
         )
         return make_robot_action(action, self.features)
+
+    def act_lanes(
+        self, observations: Sequence[Mapping[str, Any]], instructions: Sequence[str], memories: list[dict[str, Any]]
+    ) -> list[dict[str, float]]:
+        """One control step of several episodes in one call of the policy's `lane_step`: frames are batched on the
+        CPU and reach the policy's device in one transfer; `memories[i]` is episode i's own state."""
+        cpu = torch.device("cpu")
+        frames = [
+            prepare_observation_for_inference(build_dataset_frame(self.features, dict(obs), prefix="observation"), cpu)
+            for obs in observations
+        ]
+        tensors = [key for key, value in frames[0].items() if isinstance(value, torch.Tensor)]
+        batch: dict[str, Any] = {key: torch.cat([f[key] for f in frames]) for key in tensors}
+        batch["task"], batch["robot_type"] = list(instructions), self.robot_type
+        amp = self.device.type == "cuda" and self.use_amp
+        with torch.inference_mode(), torch.autocast(device_type=self.device.type) if amp else nullcontext():
+            actions = self.postprocessor(self.policy.lane_step(self.preprocessor(batch), memories))
+        return [make_robot_action(row.unsqueeze(0), self.features) for row in actions]

@@ -45,6 +45,17 @@ def nearest_blocks(positions: Tensor, present: Tensor, source: Tensor, effector:
     return positions.gather(1, index.unsqueeze(-1).expand(-1, -1, 2))
 
 
+# The batch sizes `lane_step` runs its networks on: MKL multiplies fewer than 4 rows, and oneDNN convolves 16 or
+# more images, in another order of rounding (measured on AVX2), so a row's result would depend on its batch.
+LANE_ROWS = (4, 8)
+
+
+def _pad_rows(value: Tensor, rows: int) -> Tensor:
+    """`value` with its last row repeated up to `rows` rows."""
+    missing = rows - value.shape[0]
+    return value if missing <= 0 else torch.cat([value, value[-1:].expand(missing, *value.shape[1:])])
+
+
 class Pointed(NamedTuple):
     """What the instruction points at: weights over the objects for the pushed one, its position, and the goal."""
 
@@ -133,6 +144,40 @@ class TabletopPointerPolicy(PreTrainedPolicy):
         obstacles = nearest_blocks(seen["positions"], present, pointed.weights, effector, self.config.obstacles)
         action = self.steering.action(*self.steering(effector, pointed.source, self._goal, obstacles))
         return (action * self.config.max_action).clamp(-self.config.max_action, self.config.max_action)
+
+    @torch.no_grad()
+    def lane_step(self, batch: dict[str, Any], memories: list[dict[str, Tensor]]) -> Tensor:
+        """One control step of independent episodes (evaluation lanes): row i's episode memory is `memories[i]`,
+        empty at its episode's start and filled here. A row's action is the same to the last bit in any batch: each
+        instruction is encoded on its own, and the networks run on LANE_ROWS[0] to LANE_ROWS[1] rows at a time
+        (repeating the last row), the batch sizes for which MKL and oneDNN round every row alike."""
+        for memory, task in zip(memories, batch["task"], strict=True):
+            if "text" not in memory:
+                memory["text"] = self.instruction(self.tokenizer([task], batch[STATE_KEY].device))
+        tensors = {key: value for key, value in batch.items() if isinstance(value, Tensor)}
+        low, high = LANE_ROWS
+        actions = []
+        for start in range(0, len(memories), high):
+            chunk = {key: _pad_rows(value[start : start + high], low) for key, value in tensors.items()}
+            actions.append(self._lane_chunk(chunk, memories[start : start + high]))
+        return torch.cat(actions)
+
+    def _lane_chunk(self, batch: dict[str, Tensor], memories: list[dict[str, Tensor]]) -> Tensor:
+        rows, low = len(memories), LANE_ROWS[0]
+        image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
+        logits, presence = self.heatmaps(image)
+        text = {key: _pad_rows(torch.cat([m["text"][key] for m in memories]), low) for key in memories[0]["text"]}
+        positions = apply_homography(self.image_to_board, soft_argmax(logits))
+        seen = {"logits": logits, "presence": presence, "positions": positions, **text}
+        pointed = self.compose(seen)
+        for i, memory in enumerate(memories):
+            memory.setdefault("goal", pointed.goal[i : i + 1])
+        goal = _pad_rows(torch.cat([m["goal"] for m in memories]), low)
+        effector = batch[STATE_KEY][:, 2:4].float()
+        present = (presence > 0).float()
+        obstacles = nearest_blocks(positions, present, pointed.weights, effector, self.config.obstacles)
+        action = self.steering.action(*self.steering(effector, pointed.source, goal, obstacles))
+        return (action[:rows] * self.config.max_action).clamp(-self.config.max_action, self.config.max_action)
 
     def predict_action_chunk(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
         return self.select_action(batch).unsqueeze(1)

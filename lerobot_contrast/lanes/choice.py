@@ -1,0 +1,55 @@
+"""How many lanes and torch threads an evaluation runs with: lanes are its parallelism, so torch gets one thread,
+chosen rather than inherited (results then do not depend on the core count, and a busy machine slows it in proportion
+to the share it leaves, instead of stalling threads that wait on each other)."""
+
+from __future__ import annotations
+
+from contextlib import suppress
+from typing import Any
+
+from lerobot_contrast.contrast.errors import UserError
+
+# Lanes `--lanes=auto` runs with a policy that steps all lanes in one call: the policy's calls then cost about a
+# third of one lane's each (tabletop_pointer on 2 cores); each lane holds up to one episode of camera frames
+# (200 steps x 173 kB = 35 MB) on top of the 0.5 GB that finished episodes may hold until their turn.
+AUTO_LANES = 8
+EVAL_THREADS = 1
+
+
+class LanesError(UserError):
+    pass
+
+
+def parse_lanes(value: str | int) -> int | None:
+    """--lanes: a whole number >= 1, or auto (None)."""
+    text = str(value).strip().lower()
+    if text == "auto":
+        return None
+    if not text.isdigit() or int(text) < 1:
+        raise LanesError(f"--lanes must be auto or a whole number >= 1, got {value!r}")
+    return int(text)
+
+
+def choose_lanes(value: str | int, robot: Any, policy: Any, *, operator: bool, fps: float | None) -> int:
+    """The lanes to run: one on hardware, with an operator or at a fixed rate; with auto, AUTO_LANES where the
+    policy answers all lanes in one call (other policies gain nothing from stepping side by side)."""
+    requested = parse_lanes(value)
+    alone = operator or fps is not None or not getattr(robot, "simulated", False)
+    if alone:
+        if requested not in (None, 1):
+            why = "an operator stages it" if operator else "it runs at a fixed --fps" if fps else "it is not simulated"
+            raise LanesError(f"--lanes={requested}: {robot.name} runs one trial at a time ({why}); drop --lanes")
+        return 1
+    if requested is not None:
+        return requested
+    inner = getattr(policy, "policy", policy)  # through --policy.noise_std's wrapper
+    return AUTO_LANES if getattr(inner, "batches_lanes", False) else 1
+
+
+def use_threads(threads: int = EVAL_THREADS) -> None:
+    """Set torch's thread counts for the evaluation (inter-op only where torch has not started using it)."""
+    import torch
+
+    torch.set_num_threads(threads)
+    with suppress(RuntimeError):  # fixed for good once parallel work ran in this process
+        torch.set_num_interop_threads(threads)

@@ -1,0 +1,145 @@
+"""--lanes: simulated chains of trials side by side give the journal, the observers' episodes and the stopping point
+of one lane, trial for trial; a run killed with lanes resumes to the same journal; hardware runs one lane."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+
+from lerobot_contrast.build import make_robot, register_robots
+from lerobot_contrast.config import EvalConfig, StopArgs
+from lerobot_contrast.eval import planned_evaluation
+from lerobot_contrast.evaluation import run
+from lerobot_contrast.lanes.choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
+from lerobot_contrast.lanes.runner import chains
+from lerobot_contrast.policies import PolicyArgs, make_policy
+from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
+
+WALL_CLOCK = ("started_at", "duration_s")
+register_robots()
+
+
+class Watch(QuietObserver):
+    """What the observers see of each episode, without its wall-clock times."""
+
+    def __init__(self, stop_after: int | None = None) -> None:
+        self.episodes: list[tuple] = []
+        self.stop_after = stop_after
+
+    def start(self, context, features, pose_keys):
+        self.episodes.append((context.index, context.instance.id, round(context.planned_cost, 12), []))
+
+    def step(self, timestamp_s, observation, action):
+        state = {k: v for k, v in observation.items() if isinstance(v, float)}
+        self.episodes[-1][3].append((state, dict(action)))
+
+    def end(self, record):
+        if self.stop_after is not None and len(self.episodes) > self.stop_after:
+            raise KeyboardInterrupt  # as a kill between an episode and its journal line
+        return EpisodeFiles()
+
+
+def evaluate(run_dir: Path, lanes: int, *, policy="oracle", task="language_table", n=3, steps=30, resume=False,
+             observers=(), **settings):  # fmt: skip
+    cfg = EvalConfig(task=task, n_instances=n, seed=5, max_episode_steps=steps, rerun=False, **settings)
+    cfg.policy = PolicyArgs(type=policy)
+    planned = planned_evaluation(cfg)
+    robot = make_robot(cfg)
+    robot.connect()
+    try:
+        evaluation = dataclasses.replace(
+            planned, robot=robot, policy=make_policy(cfg.policy, robot, planned.task), max_steps=steps, lanes=lanes,
+            policy_for=lambda lane_robot: make_policy(cfg.policy, lane_robot, planned.task),
+            observers=observers, output_dir=run_dir, resume=resume, config={"seed": 5, "task": task},
+        )  # fmt: skip
+        return run(evaluation)
+    finally:
+        robot.disconnect()
+
+
+def journal(run_dir: Path) -> list[dict]:
+    lines = (run_dir / "journal.jsonl").read_text().splitlines()
+    return [{k: v for k, v in json.loads(line).items() if k not in WALL_CLOCK} for line in lines]
+
+
+@pytest.mark.slow
+def test_the_learned_default_gives_one_lanes_journal_and_episodes_with_four(tmp_path):
+    watched = {}
+    for lanes in (1, 4):
+        watched[lanes] = Watch()
+        evaluate(tmp_path / f"l{lanes}", lanes, policy="tabletop_pointer", n=4, steps=25, observers=[watched[lanes]])
+    assert journal(tmp_path / "l1") == journal(tmp_path / "l4")
+    assert watched[1].episodes == watched[4].episodes
+    assert sum(len(e[3]) for e in watched[1].episodes) > 50  # the policy really drove the robot
+
+
+def test_the_apartment_gives_the_same_journal_with_three_lanes(tmp_path):
+    for lanes in (1, 3):
+        evaluate(tmp_path / f"l{lanes}", lanes, task="vln", policy="route_follower", n=3, steps=60)
+    assert journal(tmp_path / "l1") == journal(tmp_path / "l3")
+
+
+def test_a_run_killed_with_lanes_resumes_to_the_journal_of_one_lane(tmp_path):
+    evaluate(tmp_path / "one", 1)
+    with pytest.raises(KeyboardInterrupt):
+        evaluate(tmp_path / "killed", 3, observers=[Watch(stop_after=4)])
+    killed, whole = journal(tmp_path / "killed"), journal(tmp_path / "one")
+    assert 4 <= len(killed) < len(whole) and killed == whole[: len(killed)]  # up to the killed trial, no further
+    evaluate(tmp_path / "killed", 2, resume=True)
+    assert journal(tmp_path / "killed") == journal(tmp_path / "one")
+
+
+def test_the_budget_stops_lanes_where_it_stops_one_lane(tmp_path):
+    ran = {}
+    for lanes in (1, 3):
+        ran[lanes] = Watch()
+        evaluate(tmp_path / f"l{lanes}", lanes, n=6, budget=8.0, observers=[ran[lanes]])
+    kept = journal(tmp_path / "l1")
+    assert kept == journal(tmp_path / "l3")
+    assert kept[-1]["cumulative_cost"] > 8.0 and len(kept) < 6 * 7
+    assert [e[0] for e in ran[3].episodes] == [e[0] for e in ran[1].episodes]  # nothing recorded past the stop
+
+
+def test_a_stopping_rule_stops_lanes_where_it_stops_one_lane(tmp_path):
+    for lanes in (1, 4):
+        results = evaluate(tmp_path / f"l{lanes}", lanes, n=8, stop=StopArgs(width=0.9), strategy="standard")
+        assert results.summary["stopping"]["reason"] == "width"
+    assert journal(tmp_path / "l1") == journal(tmp_path / "l4")
+
+
+def test_chains_start_where_a_trial_is_staged_in_full():
+    plan = planned_evaluation(EvalConfig(n_instances=3, seed=5, repeats=2)).plan
+    cut = chains(plan)
+    assert len(cut) == 3 and sum(map(len, cut)) == len(plan)
+    assert all(chain[0].staging == "reset" and chain[0].repeat == 0 for chain in cut)
+    assert chains(plan[3:])[0][0].index == 3  # a resumed run goes on mid-chain
+
+
+class Hardware:
+    name = "so101_follower"
+    simulated = False
+
+
+def test_hardware_runs_one_lane_and_says_so_for_more():
+    assert choose_lanes("auto", Hardware(), None, operator=True, fps=10.0) == 1
+    with pytest.raises(LanesError, match="runs one trial at a time"):
+        choose_lanes("4", Hardware(), None, operator=True, fps=10.0)
+    with pytest.raises(LanesError, match="--lanes must be auto or a whole number"):
+        parse_lanes("0")
+
+
+def test_auto_lanes_batch_the_learned_default_only(tmp_path):
+    cfg = EvalConfig(n_instances=1)
+    robot = make_robot(cfg)
+    robot.connect()
+    try:
+        task = planned_evaluation(cfg).task
+        learned = make_policy(PolicyArgs(), robot, task)
+        assert choose_lanes("auto", robot, learned, operator=False, fps=None) == AUTO_LANES
+        assert choose_lanes("auto", robot, make_policy(PolicyArgs(type="oracle"), robot, task), operator=False,
+                            fps=None) == 1  # fmt: skip
+    finally:
+        robot.disconnect()
