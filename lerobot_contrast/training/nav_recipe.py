@@ -1,0 +1,161 @@
+"""The `vln_navigator` recipe: teacher demonstrations, `lerobot-train`, then DAgger rounds, all resumable.
+
+Every phase leaves its result in `output_dir` and is skipped when it is already there, so a killed run started
+again with the same settings goes on where it stopped (`lerobot-train` resumes from its last checkpoint).
+Demonstrations and DAgger roll-outs use training-split arrangements; the closed-loop check uses evaluation-split
+ones from a seed never used for training (`sampler`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from lerobot_contrast.domains.vln.sampler import sample_arrangements
+from lerobot_contrast.domains.vln.task import SUCCESS_RADIUS_M
+from lerobot_contrast.record.third_party import third_party_output
+from lerobot_contrast.training.nav_episodes import NavSimulator, SlippingTeacher, open_dataset, record_episodes
+from lerobot_contrast.training.nav_learner import NavLearner, NavMixture, closed_loop, select_action_ms
+from lerobot_contrast.training.recipe import Progress, RecipeError, _shipped_files
+
+REPO_ID = "local/vln_navigator_demos"
+
+
+@dataclass
+class NavRecipe:
+    output_dir: Path = Path("outputs/nav_policy")
+    seed: int = 0
+    # Teacher demonstrations on training arrangements; the executed command slips to a random move at this rate.
+    demos: int = 200
+    slip: float = 0.15
+    # Gradient steps of each training run: the first from scratch, then one after each DAgger round.
+    steps: list[int] = field(default_factory=lambda: [2500, 1500])
+    batch_size: int = 32
+    num_workers: int = 0
+    train_threads: int = 1
+    # DAgger: learner roll-outs per round, and the teacher's share of executed commands in each round.
+    betas: list[float] = field(default_factory=lambda: [0.3])
+    dagger_episodes: int = 60
+    max_steps: int = 120
+    # Closed-loop check after training: fresh evaluation-split arrangements.
+    eval_instances: int = 250
+    eval_seed: int = 1_000_003
+    device: str = "cpu"
+
+    def __post_init__(self) -> None:
+        if len(self.steps) != len(self.betas) + 1:
+            raise ValueError(
+                f"--recipe.steps has {len(self.steps)} entries for {len(self.betas)} DAgger rounds; "
+                "give one more than --recipe.betas (the first training run, then one per round)"
+            )
+
+    @property
+    def dataset(self) -> Path:
+        return self.output_dir / "dataset"
+
+    def train_dir(self, round_index: int) -> Path:
+        return self.output_dir / f"train_{round_index}"
+
+    def model(self, round_index: int) -> Path:
+        return self.train_dir(round_index) / "checkpoints" / "last" / "pretrained_model"
+
+    def final_model(self) -> Path:
+        return self.model(len(self.betas))
+
+
+def _record(recipe: NavRecipe, actor, instances, label: str) -> None:
+    dataset = open_dataset(recipe.dataset, REPO_ID)
+    start = time.time()
+    outcomes = record_episodes(dataset, NavSimulator(), instances, actor, recipe.max_steps)
+    dataset.finalize()
+    wins = sum(o.success for o in outcomes)
+    print(
+        f"[{label}] {len(outcomes)} episodes, {sum(o.steps for o in outcomes)} frames, "
+        f"success {wins / max(1, len(outcomes)):.2f}, {time.time() - start:.0f} s",
+        flush=True,
+    )
+
+
+def _train(recipe: NavRecipe, round_index: int) -> None:
+    out = recipe.train_dir(round_index)
+    steps = recipe.steps[round_index]
+    if (out / "checkpoints").exists():
+        args = ["--resume=true", f"--config_path={recipe.model(round_index) / 'train_config.json'}"]
+    else:
+        shutil.rmtree(out, ignore_errors=True)  # lerobot-train refuses an existing output dir without a checkpoint
+        policy = (
+            ["--policy.type=vln_navigator"] if round_index == 0 else [f"--policy.path={recipe.model(round_index - 1)}"]
+        )
+        args = [
+            f"--dataset.repo_id={REPO_ID}",
+            f"--dataset.root={recipe.dataset}",
+            *policy,
+            "--policy.push_to_hub=false",
+            f"--policy.device={recipe.device}",
+            f"--steps={steps}",
+            f"--batch_size={recipe.batch_size}",
+            f"--save_freq={max(1, min(1000, steps))}",
+            f"--num_workers={recipe.num_workers}",
+            f"--seed={recipe.seed + round_index}",
+            f"--output_dir={out}",
+            "--log_freq=100",
+            "--wandb.enable=false",
+        ]
+    command = [str(Path(sys.executable).parent / "lerobot-train"), *args]
+    env = {**os.environ, "HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": str(recipe.train_threads)}
+    log_path = recipe.output_dir / f"train_{round_index}.log"
+    with open(log_path, "a") as log:
+        status = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT, env=env).returncode
+    if status != 0:
+        raise RecipeError(f"lerobot-train exited with {status} in round {round_index}; its output is in {log_path}")
+
+
+def run(recipe: NavRecipe) -> dict[str, float]:
+    """All phases (skipping finished ones), then the closed-loop check of the final policy."""
+    import torch
+
+    torch.set_num_threads(1)  # this process renders and runs small tensors, where more threads only contend
+    recipe.output_dir.mkdir(parents=True, exist_ok=True)
+    (recipe.output_dir / "recipe.json").write_text(json.dumps(asdict(recipe), indent=1, default=str))
+    with third_party_output(recipe.output_dir):
+        return _phases(recipe)
+
+
+def _phases(recipe: NavRecipe) -> dict[str, float]:
+    progress = Progress(recipe.output_dir / "progress.json")
+    if not progress.done("demos"):
+        rng = np.random.default_rng(recipe.seed)
+        instances = sample_arrangements(recipe.demos, "train", recipe.seed, SUCCESS_RADIUS_M)
+        _record(recipe, SlippingTeacher(recipe.slip, rng), instances, "demos")
+        progress.finish("demos")
+    for round_index in range(len(recipe.betas) + 1):
+        if not progress.done(f"train_{round_index}"):
+            _train(recipe, round_index)
+            progress.finish(f"train_{round_index}")
+        if round_index < len(recipe.betas) and not progress.done(f"dagger_{round_index}"):
+            rng = np.random.default_rng([recipe.seed, round_index + 1])
+            base = recipe.seed * 1000 + round_index + 1  # a training stream of its own for each round
+            instances = sample_arrangements(recipe.dagger_episodes, "train", base, SUCCESS_RADIUS_M)
+            learner = NavLearner(recipe.model(round_index))
+            _record(recipe, NavMixture(learner, recipe.betas[round_index], rng), instances, f"dagger {round_index}")
+            progress.finish(f"dagger_{round_index}")
+    return evaluate(recipe, progress)
+
+
+def evaluate(recipe: NavRecipe, progress: Progress, model: Path | None = None) -> dict[str, float]:
+    learner = NavLearner(model or recipe.final_model())
+    instances = sample_arrangements(recipe.eval_instances, "eval", recipe.eval_seed, SUCCESS_RADIUS_M)
+    figures = closed_loop(learner, NavSimulator(), instances, recipe.max_steps)
+    figures["train_cpu_s"] = progress.state["cpu_s"]
+    figures["rounds"] = len(recipe.betas)
+    figures["weights_mb"] = sum(p.stat().st_size for p in _shipped_files(model or recipe.final_model())) / 1e6
+    figures["select_action_ms"] = select_action_ms(learner, instances[0])
+    return figures
