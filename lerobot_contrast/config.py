@@ -9,7 +9,7 @@ from typing import Any
 import draccus
 from lerobot.robots import RobotConfig
 
-from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.policies.base import PolicyArgs
 
 
@@ -95,15 +95,13 @@ class EvalConfig:
     rerun_aborted: bool = True
     # Print the plan (trials, what to move before each, planned cost) and exit without running anything.
     dry_run: bool = False
+    # Print a line per trial (not applicable ones included) besides the progress line.
+    verbose: bool = False
     # Simulated trials run side by side, the policy answering every lane in one call, with the same results as
     # one lane: a number, or auto (8 for a policy that batches lanes, else 1); always 1 on hardware.
     lanes: str = "auto"
     # Stopping rules: --stop.width=0.1, --stop.compare=RUN_DIR|hub:USER/NAME, --stop.alpha=0.05.
     stop: StopArgs = field(default_factory=StopArgs)
-
-
-class ConfigError(UserError):
-    pass
 
 
 def resume_args(argv: list[str]) -> list[str]:
@@ -116,7 +114,7 @@ def resume_args(argv: list[str]) -> list[str]:
 
 
 # Choices of one session that a resumed run may make differently, so they are not stored in config.json.
-SESSION_CHOICES = ("rerun_aborted", "lanes")
+SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes")
 
 
 def config_json(config: Any) -> dict[str, Any]:

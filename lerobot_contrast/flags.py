@@ -15,9 +15,15 @@ from typing import Any
 import draccus
 from draccus.wrappers.docstring import get_attribute_docstring
 
-from lerobot_contrast.config import ConfigError
+from lerobot_contrast.contrast.errors import UserError
 
 HELP = ("--help", "-h")
+
+
+class ConfigError(UserError):
+    """A flag or setting that cannot make a sound run."""
+
+
 WIDTH = 100
 
 
@@ -34,23 +40,34 @@ def flag_types(cls: type, prefix: str = "") -> dict[str, Any]:
     return types
 
 
+def bool_flags(cls: type) -> set[str]:
+    """The flags of `cls` that take true or false (alone, they mean true)."""
+    return {name for name, tp in flag_types(cls).items() if tp is bool}
+
+
 def _default(f: dataclasses.Field) -> Any:
     return f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
 
 
-def join_values(argv: list[str]) -> list[str]:
-    """`--name value` as `--name=value`, the form LeRobot's own commands also accept."""
+BOOL_WORDS = ("true", "false")
+
+
+def join_values(argv: list[str], booleans: set[str] = frozenset()) -> list[str]:
+    """`--name value` as `--name=value`, the form LeRobot's own commands also accept. A flag in `booleans` given
+    alone means `=true`, so it takes the next argument only when that is true or false."""
     out: list[str] = []
-    args = iter(argv)
-    for arg in args:
+    args = list(argv)
+    while args:
+        arg = args.pop(0)
+        name = arg[2:]
         if arg.startswith("--") and "=" not in arg and arg not in HELP:
-            value = next(args, None)
-            if value is not None and not value.startswith("--"):
-                out.append(f"{arg}={value}")
-                continue
-            out.append(arg)
-            if value is not None:
-                out.append(value)
+            takes_next = args and not args[0].startswith("--")
+            if name in booleans and not (takes_next and args[0].lower() in BOOL_WORDS):
+                out.append(f"{arg}=true")
+            elif takes_next:
+                out.append(f"{arg}={args.pop(0)}")
+            else:
+                out.append(arg)
             continue
         out.append(arg)
     return out
@@ -83,31 +100,83 @@ def _value_error(message: str) -> str:
 
 
 def _unknown(name: str, known: set[str]) -> ConfigError:
-    close = difflib.get_close_matches(name, sorted(known), n=1)
-    hint = f"did you mean --{close[0]}?" if close else "see --help for the flags this command takes"
+    """The nearest valid names; with none near, the valid names of the same group (--policy.*, --robot.*)."""
+    close = difflib.get_close_matches(name, sorted(known), n=3, cutoff=0.7)
+    group = name.rpartition(".")[0]
+    siblings = sorted(k for k in known if k.rpartition(".")[0] == group) if group else []
+    if close:
+        hint = f"did you mean {' or '.join('--' + c for c in close)}?"
+    elif siblings:
+        hint = f"--{group}.* takes {', '.join('--' + s for s in siblings)}"
+    else:
+        hint = "see --help for the flags this command takes"
     return ConfigError(f"unknown flag --{name}; {hint}")
 
 
-def parse_config[T](cls: type[T], argv: list[str] | None = None) -> T:
-    """Parse LeRobot-style `--name=value` flags, turning any mistake into a one-line ConfigError."""
-    argv = join_values(list(sys.argv[1:] if argv is None else argv))
-    types = flag_types(cls)
+def _robot_flags(argv: list[str]) -> set[str]:
+    """The --robot.* names the chosen --robot.type takes (none until one is chosen)."""
+    chosen = robot_type(argv)
+    if chosen is None:
+        return set()
+    from lerobot.robots import RobotConfig
+
+    if chosen not in RobotConfig.get_known_choices():
+        return {"robot.type"}
+    return {"robot.type", *flag_types(RobotConfig.get_choice_class(chosen), "robot.")}
+
+
+def check_names(argv: list[str], types: dict[str, Any], robots: bool = True) -> None:
+    """Every flag is one the command (or its chosen robot) takes, with a value; else one line naming it.
+    `robots=False` leaves --robot.* names unchecked, for a check before the robot types are registered."""
     known = set(types) | {"config_path"}
+    robot = _robot_flags(argv) if "robot" in types and robots else set()
     for arg in argv:
         if not arg.startswith("-"):
             raise ConfigError(f"unexpected argument {arg!r}; flags look like --name=value (see --help)")
         name = arg.lstrip("-").split("=", 1)[0]
-        if name not in known and not name.startswith("robot."):  # robot fields depend on --robot.type
+        if name.startswith("robot.") and "robot" in types and not robots:
+            continue
+        if name.startswith("robot.") and "robot" in types and name not in robot:
+            if not robot:
+                raise ConfigError(f"--{name} needs --robot.type=TYPE, the robot whose setting it is")
+            raise _unknown(name, robot | {k for k in known if not k.startswith("robot")})
+        if name not in known | robot:
             raise _unknown(name, known)
         if "=" not in arg:
-            raise ConfigError(f"--{name} needs a value, e.g. --{name}=true or --{name} true")
+            raise ConfigError(f"--{name} needs a value, e.g. --{name}=VALUE or --{name} VALUE")
+
+
+def parse_config[T](cls: type[T], argv: list[str] | None = None, positional: str | None = None) -> T:
+    """Parse LeRobot-style `--name=value` (or `--name value`) flags, turning any mistake into a one-line ConfigError.
+    `positional`: the field that arguments without a name fill (a list field takes several)."""
+    types = flag_types(cls)
+    argv = join_values(list(sys.argv[1:] if argv is None else argv), bool_flags(cls))
+    given = [arg for arg in argv if not arg.startswith("-")] if positional else []
+    argv = [arg for arg in argv if arg not in given]
+    if len(given) > 1 and not _is_list(types[positional]):
+        raise ConfigError(f"unexpected argument {given[1]!r}; give one {positional.upper()} (see --help)")
+    check_names(argv, types)
     argv = [_bracket_lists(arg, types) for arg in argv]
     try:
-        return draccus.parse(config_class=cls, args=argv)
+        cfg = draccus.parse(config_class=cls, args=argv)
     except SystemExit:
         raise
     except Exception as error:  # draccus reports bad values with multi-line messages
         raise ConfigError(_value_error(" ".join(str(error).split()))) from None
+    if given:
+        setattr(cfg, positional, _positional_value(types[positional], given))
+    return cfg
+
+
+def _positional_value(tp: Any, given: list[str]) -> Any:
+    if _is_list(tp):
+        return given
+    return Path(given[0]) if tp is Path or Path in typing.get_args(tp) else given[0]
+
+
+def usage_text(cls: type, usage: str, skip: tuple[str, ...] = ()) -> str:
+    """Every command's --help: its usage line, what it does, then its flags, each with its default."""
+    return "\n".join([f"usage: {usage}", "", (cls.__doc__ or "").strip(), "", *flag_lines(cls, "", skip)])
 
 
 def _type_name(tp: Any) -> str:

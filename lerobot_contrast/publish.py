@@ -1,39 +1,53 @@
-"""`python -m lerobot_contrast.publish RUN_DIR --repo_id USER/NAME [--private]`: publish a run to the Hugging Face
-Hub as a dataset repo (results table, summary, report, Rerun episodes, LeRobotDataset, dataset card).
-
-The token comes from `hf auth login` or HF_TOKEN, never from the command line; HF_ENDPOINT selects another Hub."""
+"""`python -m lerobot_contrast.publish RUN_DIR --repo_id=USER/NAME [--private=true]`: publish a run to the Hugging
+Face Hub as a dataset repo (see PublishConfig)."""
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.flags import ConfigError, parse_config, usage_text, wants_help
+
+USAGE = "python -m lerobot_contrast.publish RUN_DIR --repo_id=USER/NAME [--flag=value | --flag value] ..."
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        raise UserError(f"{message} (see --help)")
+@dataclass
+class PublishConfig:
+    """Publish a run directory to the Hugging Face Hub as a dataset repo (results table, summary, report, Rerun
+    episodes, LeRobotDataset, dataset card). The token comes from `hf auth login` or HF_TOKEN, never from the
+    command line; HF_ENDPOINT selects another Hub."""
+
+    # The run directory written by lerobot_contrast.eval; usually given as the first argument (required).
+    run_dir: Path | None = None
+    # The dataset repo to publish to, USER/NAME or ORG/NAME (required).
+    repo_id: str | None = None
+    # Create the repo private (an existing repo keeps its visibility).
+    private: bool = False
+    # Commit message (default: names the run directory).
+    message: str | None = None
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="python -m lerobot_contrast.publish", description=__doc__)
-    parser.add_argument("run_dir", type=Path, help="run directory written by lerobot_contrast.eval")
-    parser.add_argument("--repo_id", required=True, help="dataset repo to publish to, USER/NAME or ORG/NAME")
-    parser.add_argument(
-        "--private", action="store_true", help="create the repo private (an existing repo keeps its visibility)"
-    )
-    parser.add_argument("--message", help="commit message (default: names the run directory)")
-    return parser
+def parse_args(argv: Sequence[str]) -> PublishConfig:
+    args = parse_config(PublishConfig, list(argv), positional="run_dir")
+    if args.run_dir is None:
+        raise ConfigError(f"give the run directory to publish: {USAGE}")
+    if args.repo_id is None:
+        raise ConfigError("--repo_id is required: the Hub dataset repo to publish to, USER/NAME")
+    return args
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from lerobot_contrast.record.hub import publish_run
-
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if wants_help(argv):
+        print(usage_text(PublishConfig, USAGE))
+        return 0
     try:
-        args = _parser().parse_args(argv)
+        args = parse_args(argv)
+        from lerobot_contrast.record.hub import publish_run  # after the flags: a typo is answered at once
+
         url = publish_run(args.run_dir, args.repo_id, private=args.private, commit_message=args.message)
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)

@@ -4,12 +4,13 @@ in the Rerun viewer, or serve the web viewer on localhost (`--web`, works offlin
 
 from __future__ import annotations
 
-import argparse
 import os
 import re
+import signal
 import subprocess
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import quote
 
@@ -19,6 +20,7 @@ import rerun.blueprint as rrb
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.trial import TrialRecord
+from lerobot_contrast.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.rerun_log import APPLICATION_ID
 
@@ -91,7 +93,7 @@ def select(
 
 def episode_title(record: TrialRecord) -> str:
     verdict = "✓" if record.success else "✗"
-    return f"{perturbation_label(record.perturbation)} · trial {record.index} {verdict}"
+    return f"{perturbation_label(record.perturbation)} · trial {record.index + 1} {verdict}"
 
 
 def entity_prefix(record: TrialRecord) -> str:
@@ -182,31 +184,49 @@ def open_viewer(path: Path, web: bool, web_port: int, grpc_port: int) -> int:
     url = f"http://127.0.0.1:{web_port}/?url=" + quote(f"rerun+http://127.0.0.1:{grpc_port}/proxy", safe="")
     print(f"open {url} in a browser (works offline); Ctrl-C stops", flush=True)
     server = subprocess.Popen(command)
+    # SIGTERM (a service manager, `kill`) must stop the server too, or it keeps holding both ports.
+    previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
         return server.wait()
     except KeyboardInterrupt:
         server.terminate()
         server.wait(timeout=10)
         return 0
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        raise ReviewError(f"{message} (see --help)")
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="python -m lerobot_contrast.review", description=__doc__)
-    parser.add_argument("run_dir", type=Path, help="run directory written by lerobot_contrast.eval")
-    parser.add_argument("--perturbation", help="perturbations to show, e.g. LB1 or original,LB1,SB2")
-    parser.add_argument("--outcome", help="only episodes that ended in success or failure")
-    parser.add_argument("--base", help="base instance ids to show, e.g. lt-0003")
-    parser.add_argument("--web", action="store_true", help="serve the web viewer on localhost instead")
-    parser.add_argument("--web_port", type=int, default=9090, help="HTTP port of the web viewer")
-    parser.add_argument("--grpc_port", type=int, default=9876, help="port the viewer reads the recording from")
-    parser.add_argument("--output", type=Path, help=f"merged recording (default: RUN_DIR/{DEFAULT_OUTPUT})")
-    parser.add_argument("--save_only", action="store_true", help="write the merged recording and open nothing")
-    return parser
+USAGE = "python -m lerobot_contrast.review RUN_DIR [--flag=value | --flag value] ..."
+
+
+@dataclass
+class ReviewConfig:
+    """Pick a run's episodes by perturbation, outcome or base instance, merge their Rerun recordings so each base
+    instance and its perturbations sit side by side, and open the result in the Rerun viewer, or serve the web
+    viewer on localhost (--web=true, works offline)."""
+
+    # The run directory written by lerobot_contrast.eval; usually given as the first argument (required).
+    run_dir: Path | None = None
+    # Perturbations to show, e.g. LB1 or original,LB1,SB2 (default: all).
+    perturbation: str | None = None
+    # Only episodes that ended in success or failure (default: both).
+    outcome: str | None = None
+    # Base instance ids to show, e.g. lt-0003 (default: all).
+    base: str | None = None
+    # Serve the web viewer on localhost instead of opening the native viewer.
+    web: bool = False
+    # HTTP port of the web viewer.
+    web_port: int = 9090
+    # Port the viewer reads the recording from.
+    grpc_port: int = 9876
+    # The merged recording (default: RUN_DIR/review/review.rrd).
+    output: Path | None = None
+    # Write the merged recording and open nothing.
+    save_only: bool = False
 
 
 def plural(n: int, noun: str) -> str:
@@ -214,7 +234,9 @@ def plural(n: int, noun: str) -> str:
 
 
 def review(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    args = parse_config(ReviewConfig, list(sys.argv[1:] if argv is None else argv), positional="run_dir")
+    if args.run_dir is None:
+        raise ReviewError(f"give the run directory to review: {USAGE}")
     records = select(load_records(args.run_dir), args.perturbation, args.outcome, args.base)
     if not (args.save_only or args.web or _has_display()):
         raise ReviewError("no display to open the Rerun viewer on; pass --web to serve the web viewer on localhost")
@@ -230,6 +252,9 @@ def review(argv: Sequence[str] | None = None) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    if wants_help(list(sys.argv[1:] if argv is None else argv)):
+        print(usage_text(ReviewConfig, USAGE))
+        return 0
     try:
         return review(argv)
     except UserError as error:

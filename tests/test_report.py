@@ -79,13 +79,13 @@ def test_a_run_still_being_written_is_read_from_its_journal_without_touching_it(
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        ([], "error: the following arguments are required: RUN_DIR (see --help)"),
+        ([], "error: give the run directories to report on: python -m lerobot_contrast.report RUN_DIR"),
         (["{missing}"], "error: {missing}: no such run directory; pass directories written by lerobot_contrast.eval"),
         (
             ["{empty}"],
             "error: {empty}: not a run directory (no config.json); pass the folder lerobot_contrast.eval wrote",
         ),
-        (["{run}", "--metric=speed"], "error: argument --metric: invalid choice: 'speed'"),
+        (["{run}", "--metric=speed"], "error: --metric must be one of success, spl, progress, got 'speed'"),
         (["{run}", "--output_dir={blocked}/report"], "error: --output_dir: cannot write to {blocked}/report"),
     ],
 )
@@ -165,3 +165,20 @@ def test_a_run_of_the_default_policy_is_labelled_with_its_name_not_as_the_oracle
 
     assert policy_label({"policy": {"type": None, "path": None}}) == DEFAULT_POLICY
     assert policy_label({"policy": {"type": "oracle", "noise_std": 0.01}}) == "oracle (noise std 0.01)"
+
+
+def test_each_policy_gets_its_own_full_iid_line_and_the_settings_show_the_values_used(runs, tmp_path):
+    from lerobot_contrast.reporting.build import full_values
+    from lerobot_contrast.reporting.figures import perturbation_plot
+    from lerobot_contrast.reporting.markdown import used_settings
+
+    blind = tmp_path / "standard-blind-0"
+    assert eval_main([*PLAN, *RUNS["standard-0"], "--policy.language_blind=1.0", f"--output_dir={blind}"]) == 0
+    loaded = [load_run(str(path)) for path in (runs / "standard-0", runs / "contrast-0", blind, runs / "blind-0")]
+    full = full_values(loaded, "spl")
+    assert list(full) == ["oracle (noise std 0.01)", "oracle (noise std 0.01, language blind 1)"]
+    fig = perturbation_plot({}, ["original"], "spl", full, {})
+    labels = [line.get_label() for line in fig.axes[0].lines]  # the lines across the panel
+    assert [label.rsplit(" (", 1)[0] for label in labels] == [f"full i.i.d. evaluation, {policy}" for policy in full]
+    used = used_settings({"task": "language_table", "strategy": "contrast", "n_instances": None, "perturbations": None})
+    assert used["n_instances"] == 50 and used["perturbations"] == "L,LB1,LB2,S,SB1,SB2"

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from lerobot_contrast.reporting import analysis, figures, markdown, stats
-from lerobot_contrast.reporting.runs import Group, Run, group_runs, policy_pairs, reference_for
+from lerobot_contrast.reporting.runs import Group, Run, group_runs, policy_label, policy_pairs, reference_for
 
 
 @dataclass
@@ -35,12 +35,21 @@ def why_no_reference(runs: list[Run]) -> str:
     )
 
 
+def full_values(runs: list[Run], metric: str) -> dict[str, float]:
+    """The full i.i.d. value per policy (the mean over the seeds of its standard runs): a mean over two policies
+    would be neither's."""
+    by_policy: dict[str, list[float]] = {}
+    for ref in (ref for run in runs if (ref := reference_for(run, runs)) is not None):
+        by_policy.setdefault(policy_label(ref.config), []).append(stats.full_value(ref.results, metric))
+    return {policy: float(np.mean(values)) for policy, values in by_policy.items()}
+
+
 def draw(runs: list[Run], groups: list[Group], versus, metric: str, output_dir: Path) -> list[Path]:
     """The paper's left panel (per perturbation), right panel (error vs cost) and appendix (trials vs cost)."""
     unit = runs[0].cost_unit
     colors = figures.color_of([g.label for g in groups])
     references = [ref for run in runs if (ref := reference_for(run, runs)) is not None]
-    full = float(np.mean([stats.full_value(r.results, metric) for r in references])) if references else None
+    full = full_values(runs, metric)
     per_perturbation = analysis.by_column(groups, "perturbation", metric)
     contrast = {g.label: per_perturbation[g.label] for g in groups if g.runs[0].config.get("strategy") == "contrast"}
     shown = analysis.with_overall(contrast or per_perturbation, groups, metric)

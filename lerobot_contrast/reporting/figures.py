@@ -34,7 +34,7 @@ def perturbation_plot(
     table: dict[str, dict[str, stats.Estimate]],
     order: list[str],
     metric: str,
-    full: float | None,
+    full: dict[str, float] | None,
     colors: dict[str, str],
 ) -> Figure:
     """Mean metric per perturbation with 95% intervals, one bar per group (the paper's left panels).
@@ -58,8 +58,11 @@ def perturbation_plot(
         ax.bar(xs, means, width, yerr=np.nan_to_num(err), capsize=3, color=colors[label], label=label)
         for x, e in shown:  # at the bar's foot, where no interval covers it and a bar of 0 still shows its n
             ax.text(x, 0.01, f"n={e.n_trials}", ha="center", va="bottom", fontsize=7)
-    if full is not None:
-        ax.axhline(full, color="black", linestyle="--", linewidth=1, label=f"full i.i.d. evaluation ({full:.3f})")
+    for k, (policy, value) in enumerate((full or {}).items()):  # one line per policy: a mean of two is neither's
+        whose = "" if len(full) == 1 else f", {policy}"
+        style = ("--", ":", "-.")[k % 3]
+        label = f"full i.i.d. evaluation{whose} ({value:.3f})"
+        ax.axhline(value, color="black", linestyle=style, linewidth=1, label=label)
     ax.set_xticks(range(len(names)), [_name(n) for n in names])
     ax.set_xlim(-0.6, len(names) - 0.4)
     ax.set_xlabel("trials (original = the i.i.d. base instances; all trials = the strategy's estimate)")

@@ -124,10 +124,28 @@ def flatten(config: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     return out
 
 
+def used_settings(config: dict[str, Any]) -> dict[str, Any]:
+    """The run's settings, with the task defaults that a None stands for written out as the values used."""
+    from lerobot_contrast.contrast.errors import UserError
+    from lerobot_contrast.domains import load_task
+
+    out = flatten(config)
+    try:
+        task = load_task(config["task"], families=config.get("families"))
+    except (UserError, KeyError, OSError):  # a published run of a task file this machine does not have
+        return out
+    if out.get("n_instances") is None:
+        out["n_instances"] = task.default_instances
+    if out.get("perturbations") is None:
+        used = [p.name for p in task.perturbations] if config.get("strategy") == "contrast" else []
+        out["perturbations"] = ",".join(used) or "none"
+    return out
+
+
 def settings_section(runs: list[Run]) -> list[str]:
     lines = ["## Settings of every run", ""]
     for run in runs:
-        flags = ", ".join(f"`{k}={v}`" for k, v in flatten(run.config).items())
+        flags = ", ".join(f"`{k}={v}`" for k, v in used_settings(run.config).items())
         state = "complete" if run.complete else "incomplete (stopped early, or still running)"
         lines.append(f"- **{run.name}** (`{run.path}`, {state}): {flags}")
     return lines + [""]

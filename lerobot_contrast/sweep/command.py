@@ -13,7 +13,7 @@ from rich.console import Console
 from lerobot_contrast.config import ConfigError
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.eval import planned_evaluation
-from lerobot_contrast.flags import flag_lines, join_values, parse_config, wants_help
+from lerobot_contrast.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.sweep_dir import is_complete, is_sweep_dir, write_index, write_sweep_results
 from lerobot_contrast.sweep.cells import Cell, read_sweep_file, sweep_cells
@@ -41,13 +41,6 @@ class SweepConfig:
     # List the cells and their planned trials, then exit without running anything.
     dry_run: bool = False
     ray: RayArgs = field(default_factory=RayArgs)
-
-
-def sweep_args(argv: list[str]) -> list[str]:
-    """The sweep file as the first argument, or as --sweep=PATH."""
-    if argv and not argv[0].startswith("-"):
-        return [f"--sweep={argv[0]}", *argv[1:]]
-    return argv
 
 
 def sweep_folder(cfg: SweepConfig, spec: dict) -> Path:
@@ -148,12 +141,12 @@ def _report(console: Console, folder: Path, outcome: CellOutcome) -> None:
 def main(argv: list[str] | None = None) -> int:
     console = Console()
     try:
-        argv = sweep_args(join_values(list(sys.argv[1:] if argv is None else argv)))
+        argv = list(sys.argv[1:] if argv is None else argv)
         if wants_help(argv):
-            lines = [f"usage: {COMMAND} [--flag=value | --flag value] ...", "", SweepConfig.__doc__ or "", ""]
-            print("\n".join(lines + flag_lines(SweepConfig, "")))
+            print(usage_text(SweepConfig, f"{COMMAND} [--flag=value | --flag value] ..."))
             return 0
-        return run_sweep(parse_config(SweepConfig, argv), console)
+        # The sweep file as the first argument, or as --sweep=PATH.
+        return run_sweep(parse_config(SweepConfig, argv, positional="sweep"), console)
     except KeyboardInterrupt:
         print(
             "\ninterrupted: every finished trial is in its cell's journal; continue with --resume=true", file=sys.stderr

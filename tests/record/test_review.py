@@ -75,7 +75,7 @@ def test_a_missing_episode_file_is_reported_and_left_out(recorded_run, tmp_path,
         (["--outcome=maybe"], "error: --outcome must be one of success, failure, got 'maybe'\n"),
         (["--perturbation=original,XX"], "error: --perturbation: no recorded episode has XX; this run has LB1, SB1"),
         (["--base=lt-0999"], "error: --base: no recorded episode has lt-0999; this run has lt-"),
-        (["--colour=red"], "error: unrecognized arguments: --colour=red (see --help)\n"),
+        (["--colour=red"], "error: unknown flag --colour; see --help for the flags this command takes\n"),
     ],
 )
 def test_bad_flags_give_a_one_line_error(recorded_run, capsys, args, message):
@@ -118,7 +118,8 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
-def test_web_serves_the_viewer_on_localhost_until_ctrl_c(recorded_run, tmp_path):
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
+def test_web_serves_the_viewer_on_localhost_until_ctrl_c_or_sigterm(recorded_run, tmp_path, stop):
     web, grpc = free_port(), free_port()
     command = [sys.executable, "-m", "lerobot_contrast.review", str(recorded_run), "--perturbation=SB1", "--web"]
     command += [f"--web_port={web}", f"--grpc_port={grpc}", f"--output={tmp_path / 'merged.rrd'}"]
@@ -129,15 +130,16 @@ def test_web_serves_the_viewer_on_localhost_until_ctrl_c(recorded_run, tmp_path)
         assert "<html" in page and "Rerun" in page
         with socket.create_connection(("127.0.0.1", grpc), timeout=5):
             pass  # the recording is served over gRPC on the port the page points at
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(stop)
         out, _ = proc.communicate(timeout=30)
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 0
     assert f"open http://127.0.0.1:{web}/?url=rerun%2Bhttp%3A%2F%2F127.0.0.1%3A{grpc}%2Fproxy in a browser" in out
-    with pytest.raises(OSError):
-        socket.create_connection(("127.0.0.1", web), timeout=2).close()
+    for port in (web, grpc):  # the viewer the command started is gone with it, and so are its ports
+        with pytest.raises(OSError):
+            socket.create_connection(("127.0.0.1", port), timeout=2).close()
 
 
 def _get(url: str, deadline: float) -> str:
