@@ -94,7 +94,9 @@ def render(family: str, words: Mapping[str, Any]) -> str:
     if family == "block2block":
         return f"{words['verb']} {words['block']} {words['preposition']} {words['target']}"
     if family == "block2absolutelocation":
-        return f"{words['verb']} {words['block']} to the {words['location']}"
+        location = words["location"]  # "towards your base" is a direction already: no "to the" before it
+        place = location if location.startswith("towards ") else f"to the {location}"
+        return f"{words['verb']} {words['block']} {place}"
     if family == "block2relativelocation":
         if words["diagonal"]:
             direction = words["diagonal"].format(v=words["vertical"], h=words["horizontal"])

@@ -241,3 +241,13 @@ def test_perturbing_the_scene_left_behind():
     assert perturb(TASK, P["L"], after, rng) is None
     moved = perturb(TASK, P["SB1"], after, rng)
     assert moved is not None and _changed(after.scene, moved.scene) == ["blue_cube"]
+
+
+def test_a_location_that_is_already_a_direction_reads_as_english():
+    start = scene(red_moon=(0.375, 0.0), blue_cube=(0.3, -0.15))
+    top = make(
+        fam.ABSOLUTE, {"block": "red_moon", "location": "top"}, {**ABS_WORDS, "location": "towards your base"}, start
+    )
+    assert top.instruction == "move the red moon towards your base"
+    flipped = [P["LB2"].apply(top, np.random.default_rng(seed)).instruction for seed in range(6)]
+    assert all(" to the " in text and "towards" not in text for text in flipped)
