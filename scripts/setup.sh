@@ -10,5 +10,6 @@ fi
   -e robots/lerobot_robot_locobot \
   -e policies/lerobot_policy_language_table \
   -e policies/lerobot_policy_tabletop_pointer \
+  -e envs/lerobot_env_language_table \
   -e policies/lerobot_policy_vln_navigator \
   -e '.[dev]'

@@ -4,7 +4,9 @@ as a dry run or `--help`."""
 import re
 import runpy
 import shlex
+import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -32,6 +34,11 @@ def python_commands() -> list[list[str]]:
     return [c[2:] for c in shell_commands() if c[0].endswith("python") and c[1] == "-m"]
 
 
+def lerobot_eval_commands() -> list[list[str]]:
+    """The flags of each `lerobot-eval` command."""
+    return [c[1:] for c in shell_commands() if Path(c[0]).name == "lerobot-eval"]
+
+
 def as_check(module: str, args: list[str]) -> list[str]:
     """An evaluation runs as a dry run (it plans, needs no robot, policy or network); everything else as --help."""
     if module == "lerobot_contrast.eval" and "--help" not in args and not any("hub:" in a for a in args):
@@ -56,9 +63,26 @@ def test_each_command_runs_in_dry_run_or_help_form(command, tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     task_file = next(b for b in code_blocks("yaml", [ROOT / "docs" / "tasks.md"]) if "name: my_table" in b)
     (tmp_path / "my_table.yaml").write_text(task_file, encoding="utf-8")  # the docs' complete task file
+    for arg in args:  # a checkpoint of yours the command names by its path: a dry run needs the directory to exist
+        if arg.startswith("--policy.path=") and arg.count("/") > 1:
+            (tmp_path / arg.split("=", 1)[1]).mkdir(parents=True, exist_ok=True)
     monkeypatch.setattr(sys, "argv", [module, *args])
     with pytest.raises(SystemExit) as exited:
         runpy.run_module(module, run_name="__main__", alter_sys=True)
         raise SystemExit(0)
     out, err = capsys.readouterr()
     assert exited.value.code in (0, None), f"{module} {' '.join(args)} exited {exited.value.code}: {err[-500:]}"
+
+
+def test_every_lerobot_eval_command_uses_flags_and_paths_that_exist():
+    commands = lerobot_eval_commands()
+    flags = [flag.split("=", 1) for command in commands for flag in command]
+    assert commands and {value for name, value in flags if name == "--env.type"} == {"language_table"}
+    for name, value in flags:
+        if name == "--policy.path" or (name == "--env.instances" and not value.startswith("outputs/")):
+            assert (ROOT / value).is_dir(), f"{name}={value} is not a directory of this repository"
+    shown = [Path(sys.executable).with_name("lerobot-eval"), "--env.type=language_table", "--help"]
+    usage = subprocess.run(shown, capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert usage.returncode == 0, usage.stderr[-2000:]
+    known = set(re.findall(r"--(?:env|eval)\.\w+", usage.stdout))
+    assert {name for name, _ in flags if name.startswith(("--env.", "--eval."))} - {"--env.type"} <= known
