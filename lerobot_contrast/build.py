@@ -76,7 +76,9 @@ def choose_robot(cfg: EvalConfig) -> None:
     cfg.robot = robot_class(camera=needs_camera(cfg))
 
 
-def make_robot(cfg: EvalConfig) -> Any:
+def make_robot(cfg: EvalConfig, chosen: str | None = None) -> Any:
+    """The robot of cfg.robot; `chosen`: the --robot.type given, which errors name (one config class may serve
+    several types, e.g. so100_follower and so101_follower, and knows only its first name)."""
     from lerobot.robots import make_robot_from_config
 
     choose_robot(cfg)
@@ -84,7 +86,7 @@ def make_robot(cfg: EvalConfig) -> Any:
         return make_robot_from_config(cfg.robot)
     except Exception as error:
         raise ConfigError(
-            f"--robot.type={cfg.robot.type}: cannot build the robot ({' '.join(str(error).split())})"
+            f"--robot.type={chosen or cfg.robot.type}: cannot build the robot ({' '.join(str(error).split())})"
         ) from None
 
 

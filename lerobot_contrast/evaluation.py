@@ -73,7 +73,8 @@ class Evaluation:
     # run started) counts as its default on resume.
     config_defaults: Mapping[str, Any] = field(default_factory=dict)
     labels: Mapping[str, Any] = field(default_factory=dict)  # e.g. strategy and policy, for the summary and logs
-    verbose: bool = False  # print a line per trial
+    verbose: bool = False  # print a line per trial (with `progress`: the run's notes, and `progress` shows trials)
+    progress: Callable[[TrialRecord], None] | None = None  # told of each trial once recorded (progress.RunProgress)
     stop: StopRule | None = None  # sequential stopping rules, checked after every trial
     adaptive: bool = False  # --order=adaptive: each next trial is chosen from the outcomes so far (adaptive.py)
     lanes: int = 1  # simulated chains of trials run side by side (lanes/), with the same results as one
@@ -157,7 +158,7 @@ def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
     state = LoopState.resume(records, ev.task.storage_scene())
     if records and ev.verbose:
         print(
-            f"resuming {run_dir.path} at trial {state.next_index} ({state.cumulative_cost:.2f} {ev.cost_model.unit} spent)"
+            f"resuming {run_dir.path} at trial {state.next_index + 1} ({state.cumulative_cost:.2f} {ev.cost_model.unit} spent)"
         )
     complete = False
     monitor = None if ev.stop is None else Monitor(ev.plan, ev.stop)
@@ -175,7 +176,9 @@ def _run(ev: Evaluation, run_dir: RunDir | None) -> Results:
                     records.append(record)
                 else:
                     run_dir.journal.append(record)
-                if ev.verbose:
+                if ev.progress is not None:
+                    ev.progress(record)
+                elif ev.verbose:
                     print(trial_line(record, ev.cost_model.unit), flush=True)
             complete = True
         finally:

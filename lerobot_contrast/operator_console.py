@@ -151,7 +151,7 @@ class OperatorConsole:
         while True:
             self.console.print(
                 f"outcome? {choices} · [bold]p FRACTION[/] progress · [bold]r[/] redo · [bold]k[/] skip · "
-                f"[bold]q[/] stop{default[1]}"
+                f"[bold]q[/] stop (this trial is not recorded){default[1]}"
             )
             answer = self.answers.next().lower()
             if answer == "" and default[0] is not None:

@@ -12,22 +12,17 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import quote
-
-import rerun as rr
-import rerun.blueprint as rrb
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.trial import TrialRecord
 from lerobot_contrast.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.record.rerun_log import APPLICATION_ID
 
-try:  # rerun-sdk 0.38+ moved the chunk API out of `experimental`
-    from rerun.chunk import RrdReader, send_chunks
-except ImportError:
-    from rerun.experimental import RrdReader, send_chunks
+if TYPE_CHECKING:
+    import rerun.blueprint as rrb
 
 ORIGINAL = "original"
 OUTCOMES = ("success", "failure")
@@ -111,6 +106,8 @@ def _remap(path: str, prefix: str) -> str | None:
 
 
 def _cell(record: TrialRecord, cameras: list[str]) -> rrb.Container:
+    import rerun.blueprint as rrb
+
     prefix = entity_prefix(record)
     views = [rrb.Spatial2DView(origin=f"{prefix}/camera/{cam}", name=cam) for cam in cameras]
     views += [
@@ -126,6 +123,15 @@ def merge_episodes(run_dir: Path, records: Sequence[TrialRecord], output: Path) 
     instance with its episodes side by side; all share the `frame` and `time` timelines, so they play in step.
 
     Returns the merged file and the episode files that were missing."""
+    import rerun as rr  # here, not at the top: the flags are checked before Rerun loads
+    import rerun.blueprint as rrb
+
+    from lerobot_contrast.record.rerun_log import APPLICATION_ID
+
+    try:  # rerun-sdk 0.38+ moved the chunk API out of `experimental`
+        from rerun.chunk import RrdReader, send_chunks
+    except ImportError:
+        from rerun.experimental import RrdReader, send_chunks
     chunks, missing, tabs = [], [], {}
     for record in records:
         path = run_dir / str(record.rerun_path)

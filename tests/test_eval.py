@@ -1,5 +1,6 @@
 """End to end: `python -m lerobot_contrast.eval` in the simulator, kill-and-resume, and bad-input messages."""
 
+import importlib.util
 import json
 import os
 import signal
@@ -59,7 +60,7 @@ def test_a_killed_run_resumes_without_losing_or_repeating_a_trial(tmp_path):
     assert 4 <= partial < len(journal(reference))
     result = cli(*LONGER, f"--output_dir={killed}", "--resume=true")
     assert result.returncode == 0, result.stderr
-    assert f"resuming {killed} at trial {partial}" in result.stdout
+    assert f"resuming {killed} at trial {partial + 1}" in result.stdout  # numbered from 1, as every line is
     assert journal(killed) == journal(reference)
 
 
@@ -126,7 +127,7 @@ def test_dry_run_prints_the_staging_and_writes_nothing(tmp_path, capsys):
         (["--robot.type=language_table_sim", "--robot.camera=maybe"], "--robot.camera: couldn't parse 'maybe'"),
         (["--resume=true"], "--resume needs --output_dir"),
         (["--families=[block2nowhere]"], "--families: unknown Language-Table families ['block2nowhere']"),
-        (["--rerun"], "--rerun needs a value, e.g. --rerun=true"),
+        (["--seed"], "--seed needs a value, e.g. --seed=VALUE or --seed VALUE"),
         (["--robot.type=so102_follower"], "--robot.type=so102_follower is not a known robot; known: bi_openarm"),
     ],
 )
@@ -189,3 +190,41 @@ def test_a_run_started_before_a_setting_existed_resumes_with_that_setting_at_its
     assert main([f"--output_dir={run}", "--resume=true"]) == 0
     assert main([f"--output_dir={run}", "--resume=true", "--stop.width=0.5"]) == 2
     assert "--stop=" in capsys.readouterr().err and len(journal(run)) == before
+
+
+def test_an_added_object_is_listed_with_what_bringing_it_in_is_charged(capsys):
+    assert main(["--task=so101_blocks", "--robot.type=so101_follower", "--robot.port=/dev/null", "--dry_run=true"]) == 0
+    moves = [line for line in capsys.readouterr().out.splitlines() if "(off the table)" in line]
+    assert moves and all(line.endswith(", charged 0.30 m") for line in moves), moves
+    assert any("(off the table) -> (" in line and "brought in" in line for line in moves)
+
+
+def test_a_robot_without_its_motor_extra_is_named_as_given(tmp_path, capsys):
+    if importlib.util.find_spec("scservo_sdk") is not None:
+        pytest.skip("the feetech extra is installed here, so the robot builds")
+    args = ["--task=so101_blocks", "--robot.type=so101_follower", "--robot.port=/dev/null", "--n_instances=1"]
+    assert main([*args, f"--output_dir={tmp_path / 'run'}"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --robot.type=so101_follower: cannot build the robot") and "feetech" in err
+    assert not (tmp_path / "run").exists()
+
+
+def test_an_existing_run_directory_is_refused_before_the_policy_loads(tmp_path, monkeypatch, capsys):
+    import lerobot_contrast.eval as command
+
+    def must_not_load(*args, **kwargs):
+        raise AssertionError("the policy loaded before the run directory was checked")
+
+    monkeypatch.setattr(command, "make_policy", must_not_load)
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "journal.jsonl").write_text("")
+    assert main(["--n_instances=1", f"--output_dir={tmp_path / 'run'}"]) == 2
+    assert "already exists; pass --resume=true" in capsys.readouterr().err
+
+
+def test_a_dry_run_names_a_policy_path_that_is_not_there(tmp_path, capsys):
+    assert main([f"--policy.path={tmp_path / 'no_such_model'}", "--dry_run=true"]) == 2
+    assert capsys.readouterr().err == (
+        f"error: --policy.path: no such directory: {tmp_path / 'no_such_model'}; give a directory written by "
+        "save_pretrained or a Hub repo id\n"
+    )

@@ -97,3 +97,18 @@ def test_the_end_of_the_operators_input_stops_the_session_resumably(tmp_path, mo
 def test_auto_needs_a_robot_that_reports_its_scene(tmp_path, monkeypatch, capsys):
     assert main(["--n_instances=1", "--operator=sometimes", f"--output_dir={tmp_path / 'run'}"]) == 2
     assert "--operator" in capsys.readouterr().err
+
+
+def test_a_redo_lists_the_moves_from_where_the_first_attempt_left_things(tmp_path, monkeypatch, capsys):
+    assert session(monkeypatch, tmp_path / "run", ["", "r", "", "", "", "", "", ""]) == 0
+    shown = capsys.readouterr().out.split("trial 1/")
+    first, redo = shown[1].split("planned cost")[0], shown[2].split("planned cost")[0]
+    assert "move" in first and first != redo  # the oracle pushed a block: it is staged back from where it is now
+
+
+def test_stopping_at_the_outcome_prompt_says_the_trial_is_not_recorded(tmp_path, monkeypatch, capsys):
+    assert session(monkeypatch, tmp_path / "run", ["", "q"]) == 0
+    out = " ".join(capsys.readouterr().out.split())  # rich wraps the prompt to the console's width
+    assert "q stop (this trial is not recorded)" in out
+    assert "before labelling trial 1, which is not recorded and runs again on resume" in out
+    assert journal(tmp_path / "run") == []

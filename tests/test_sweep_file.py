@@ -97,3 +97,11 @@ def test_help_lists_the_sweep_flags(capsys):
     out = capsys.readouterr().out
     assert out.startswith("usage: python -m lerobot_contrast.sweep SWEEP.yaml")
     assert all(f"  --{flag} " in out for flag in ("output_dir", "resume", "max_retries", "ray.address", "ray.num_cpus"))
+
+
+def test_a_dry_run_names_a_policy_path_that_is_not_there(tmp_path, capsys):
+    missing = tmp_path / "no_such_model"
+    spec = SMALL | {"eval": {**SMALL["eval"], "policy": {"path": str(missing)}}}
+    assert main([str(write(tmp_path, spec)), f"--output_dir={tmp_path / 'out'}", "--dry_run", "true"]) == 2
+    err = capsys.readouterr().err
+    assert f"--policy.path: no such directory: {missing}" in err and err.count("\n") == 1, err
