@@ -11,7 +11,9 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
+import os
 import resource
+import subprocess
 import sys
 import tempfile
 import time
@@ -36,6 +38,38 @@ def timed_run(flags: list[str], run_dir: Path) -> float:
     return time.perf_counter() - start
 
 
+# CPU feature sets a machine may give torch's own kernels, oneDNN's convolutions and MKL's matrix products.
+FEATURE_SETS = {
+    "aten_default": {"ATEN_CPU_CAPABILITY": "default"},
+    "onednn_sse41": {"ONEDNN_MAX_CPU_ISA": "SSE41"},
+    "mkl_compatible": {"MKL_CBWR": "COMPATIBLE"},
+    "all_baseline": {"ATEN_CPU_CAPABILITY": "default", "ONEDNN_MAX_CPU_ISA": "SSE41", "MKL_CBWR": "COMPATIBLE"},
+}
+
+
+def feature_set_runs(flags: list[str], tmp: Path) -> list[str]:
+    """Run the evaluation as this CPU would on machines with fewer features; per feature set, how many trials
+    differ from this machine's and by how much the overall success and SPL move."""
+    native = _subprocess_run(flags, tmp / "native", {})
+    figures = []
+    for name, env in FEATURE_SETS.items():
+        other = _subprocess_run(flags, tmp / name, env)
+        a, b = journal(tmp / "native"), journal(tmp / name)
+        differing = sum(x != y for x, y in zip(a, b, strict=False)) + abs(len(a) - len(b))
+        moved = {k: abs(native[k] - other[k]) for k in ("success", "spl")}
+        figures.append(
+            f"{name}_differing={differing} {name}_dsuccess={moved['success']:.3f} {name}_dspl={moved['spl']:.3f}"
+        )
+    return figures
+
+
+def _subprocess_run(flags: list[str], run_dir: Path, env: dict[str, str]) -> dict[str, float]:
+    command = [sys.executable, "-m", "lerobot_contrast.eval", *flags, f"--output_dir={run_dir}"]
+    subprocess.run(command, env={**os.environ, **env}, check=True, stdout=subprocess.DEVNULL)
+    overall = json.loads((run_dir / "summary.json").read_text())["overall"]
+    return {"success": overall["success_rate"], "spl": overall["spl"]}
+
+
 def spin(stop: float) -> None:
     while time.time() < stop:
         pass
@@ -46,8 +80,13 @@ def main() -> None:
     parser.add_argument("--lanes", default="auto", help="lanes of the second run (default: the evaluation's auto)")
     parser.add_argument("--n_instances", type=int, default=None, help="default: the task's own (the default eval)")
     parser.add_argument("--busy", action="store_true", help="keep one core busy with another process meanwhile")
+    parser.add_argument("--feature_sets", action="store_true", help="instead: compare runs under CPU feature sets")
     args, flags = parser.parse_known_args()
     flags = [*flags, *([f"--n_instances={args.n_instances}"] if args.n_instances else [])]
+    if args.feature_sets:
+        with tempfile.TemporaryDirectory() as tmp:
+            print(" ".join(feature_set_runs(flags, Path(tmp))))
+        return
     from lerobot_contrast.eval import main as warm  # imports and weights load before anything is timed
 
     with tempfile.TemporaryDirectory() as tmp:

@@ -129,6 +129,10 @@ def test_hardware_runs_one_lane_and_says_so_for_more():
         choose_lanes("4", Hardware(), None, operator=True, fps=10.0)
     with pytest.raises(LanesError, match="--lanes must be auto or a whole number"):
         parse_lanes("0")
+    simulator = dataclasses.make_dataclass("Sim", [("name", str, "sim"), ("simulated", bool, True)])()
+    with pytest.raises(LanesError, match="--max_episode_s limits episodes in wall time"):
+        choose_lanes("3", simulator, None, operator=False, fps=None, max_episode_s=5.0)
+    assert choose_lanes("3", simulator, None, operator=False, fps=None) == 3
 
 
 def test_auto_lanes_batch_the_learned_default_only(tmp_path):

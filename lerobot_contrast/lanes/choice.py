@@ -30,14 +30,22 @@ def parse_lanes(value: str | int) -> int | None:
     return int(text)
 
 
-def choose_lanes(value: str | int, robot: Any, policy: Any, *, operator: bool, fps: float | None) -> int:
-    """The lanes to run: one on hardware, with an operator or at a fixed rate; with auto, AUTO_LANES where the
-    policy answers all lanes in one call (other policies gain nothing from stepping side by side)."""
+def choose_lanes(
+    value: str | int, robot: Any, policy: Any, *, operator: bool, fps: float | None, max_episode_s: float | None = None
+) -> int:
+    """The lanes to run: one on hardware, with an operator, at a fixed rate or with episodes limited in wall time
+    (lanes stretch each episode's wall time); with auto, AUTO_LANES where the policy answers all lanes in one call
+    (other policies gain nothing from stepping side by side)."""
     requested = parse_lanes(value)
-    alone = operator or fps is not None or not getattr(robot, "simulated", False)
-    if alone:
+    why = (
+        "an operator stages it" if operator
+        else "it is not simulated" if not getattr(robot, "simulated", False)
+        else "it runs at a fixed --fps" if fps is not None
+        else "--max_episode_s limits episodes in wall time" if max_episode_s is not None
+        else None
+    )  # fmt: skip
+    if why is not None:
         if requested not in (None, 1):
-            why = "an operator stages it" if operator else "it runs at a fixed --fps" if fps else "it is not simulated"
             raise LanesError(f"--lanes={requested}: {robot.name} runs one trial at a time ({why}); drop --lanes")
         return 1
     if requested is not None:

@@ -26,7 +26,7 @@ from lerobot_contrast.runner import RobotRunner
 # Trials whose staging was paid for: the scene they left behind is where the next one starts.
 STAGED = ("done", "aborted")
 # Episodes waiting for their turn to be recorded may hold this many bytes of observations before idle lanes wait.
-HELD_BYTES = 1 << 30
+HELD_BYTES = 512 << 20
 
 # (trial, staged, scene the lane left) -> the trial's context as the lane runs it.
 ContextFor = Callable[[PlannedTrial, Staged, Scene], TrialContext]
