@@ -29,14 +29,23 @@ from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.evaluation import Evaluation, check_budget, preview, run
-from lerobot_contrast.flags import help_text, join_values, parse_config, robot_type, wants_help
+from lerobot_contrast.flags import (
+    bool_flags,
+    check_names,
+    flag_types,
+    help_text,
+    join_values,
+    parse_config,
+    robot_type,
+    wants_help,
+)
 from lerobot_contrast.lanes.choice import choose_lanes, parse_lanes, use_threads
 from lerobot_contrast.operator_console import OperatorConsole, SessionStopped
 from lerobot_contrast.policies import Policy, make_policy
+from lerobot_contrast.progress import RunProgress, header_lines
 from lerobot_contrast.record.compare_run import compare_rule
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
-from lerobot_contrast.record.summary import format_summary
 from lerobot_contrast.runner import RobotLostError
 
 if TYPE_CHECKING:
@@ -89,6 +98,13 @@ def _check_policy_args(cfg: EvalConfig) -> None:
         raise ConfigError(f"--policy.noise_std must be a number of metres >= 0, got {noise:g}")
     if not 0 <= blind <= 1:
         raise ConfigError(f"--policy.language_blind is a probability between 0 and 1, got {blind:g}")
+    from lerobot_contrast.policies.pretrained import looks_like_path
+
+    path = cfg.policy.path  # checked here so that a dry run, and a sweep's, names a policy that is not there
+    if path is not None and looks_like_path(path) and not Path(path).expanduser().is_dir():
+        raise ConfigError(
+            f"--policy.path: no such directory: {path}; give a directory written by save_pretrained or a Hub repo id"
+        )
 
 
 def _check_run_dir(cfg: EvalConfig) -> None:
@@ -96,6 +112,14 @@ def _check_run_dir(cfg: EvalConfig) -> None:
         raise ConfigError("--resume needs --output_dir naming the run directory to continue")
     if cfg.output_dir is not None and cfg.output_dir.exists() and not cfg.output_dir.is_dir():
         raise ConfigError(f"--output_dir: {cfg.output_dir} is a file, not a directory; choose a directory")
+
+
+def _check_new_run_dir(cfg: EvalConfig) -> None:
+    path = cfg.output_dir
+    if not cfg.resume and path is not None and path.is_dir() and any(path.iterdir()):
+        raise ConfigError(
+            f"--output_dir: {path} already exists; pass --resume=true to continue that run or choose a new directory"
+        )
 
 
 def build_plan(cfg: EvalConfig) -> tuple[Task, list[PlannedTrial]]:
@@ -121,7 +145,7 @@ def default_output_dir(cfg: EvalConfig, task: Task) -> Path:
 
 def dry_run(evaluation: Evaluation) -> None:
     records, unit = preview(evaluation), evaluation.cost_model.unit
-    print("\n".join(plan_lines(records, evaluation.task.storage_scene(), unit)))
+    print("\n".join(plan_lines(records, evaluation.task.storage_scene(), evaluation.cost_model)))
     done = [r for r in records if r.status == "done"]
     total = done[-1].cumulative_cost if done else 0.0
     print(
@@ -208,14 +232,16 @@ def equipped(
     )
 
 
-def plan_and_run(cfg: EvalConfig) -> int:
-    """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code."""
+def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
+    """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code.
+    `chosen_robot`: the --robot.type as given, for messages."""
     planned = planned_evaluation(cfg)
     task = planned.task
     if cfg.dry_run:
         dry_run(planned)
         return 0
-    robot = make_robot(cfg)
+    _check_new_run_dir(cfg)  # before the robot connects and the policy's weights load
+    robot = make_robot(cfg, chosen_robot)
     # Connect before creating the run directory: an unreachable robot leaves nothing behind to resume.
     # A remote robot also says on connecting whether it can stage scenes.
     connect(robot)
@@ -233,8 +259,15 @@ def plan_and_run(cfg: EvalConfig) -> int:
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
     resume = f"--output_dir={path} --resume=true"
+    print("\n".join(header_lines(evaluation.settings, path, f"python -m lerobot_contrast.eval {resume}")), flush=True)
+    journal = path / "journal.jsonl"
+    already = read_journal(journal) if cfg.resume and journal.is_file() else []
+    # The operator console prompts between trials, so a redrawn bar would tear its prompts: plain lines there.
+    live = False if evaluation.operator is not None else None
+    progress = RunProgress(len(evaluation.plan), unit, verbose=cfg.verbose, already=already, live=live)
     try:
-        results = run(evaluation)
+        with progress:
+            results = run(dataclasses.replace(evaluation, progress=progress))
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: every finished trial is in {path / 'journal.jsonl'}; continue with {resume}",
@@ -247,7 +280,9 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     except RobotLostError as error:
         print(f"error: {error} with {resume}", file=sys.stderr)
         return 2
-    print(format_summary(results.summary, unit))
+    from lerobot_contrast.reporting.run_table import results_table  # pandas and scipy, needed only now
+
+    print(results_table(results.records, results.summary, unit))
     if "stopping" in results.summary:
         print(summary_line(results.summary["stopping"]))
     spent, ran = results.summary["overall"]["cumulative_cost"], len(results.records)
@@ -265,12 +300,14 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     try:
-        argv = join_values(list(sys.argv[1:] if argv is None else argv))
+        argv = join_values(list(sys.argv[1:] if argv is None else argv), bool_flags(EvalConfig))
+        if not wants_help(argv):  # a mistyped flag is named before LeRobot's robots and plugins load
+            check_names(argv, flag_types(EvalConfig), robots=False)
         check_robot_type(argv, register_robots())
         if wants_help(argv):
             print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv)))
             return 0
-        return plan_and_run(parse_config(EvalConfig, resume_args(argv)))
+        return plan_and_run(parse_config(EvalConfig, resume_args(argv)), robot_type(argv))
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
