@@ -34,9 +34,9 @@ def python_commands() -> list[list[str]]:
     return [c[2:] for c in shell_commands() if c[0].endswith("python") and c[1] == "-m"]
 
 
-def lerobot_eval_commands() -> list[list[str]]:
-    """The flags of each `lerobot-eval` command."""
-    return [c[1:] for c in shell_commands() if Path(c[0]).name == "lerobot-eval"]
+def lerobot_commands(program: str) -> list[list[str]]:
+    """The flags of each command of LeRobot's `program` (`lerobot-eval`, `lerobot-train`)."""
+    return [c[1:] for c in shell_commands() if Path(c[0]).name == program]
 
 
 def as_check(module: str, args: list[str]) -> list[str]:
@@ -74,15 +74,18 @@ def test_each_command_runs_in_dry_run_or_help_form(command, tmp_path, monkeypatc
     assert exited.value.code in (0, None), f"{module} {' '.join(args)} exited {exited.value.code}: {err[-500:]}"
 
 
-def test_every_lerobot_eval_command_uses_flags_and_paths_that_exist():
-    commands = lerobot_eval_commands()
+@pytest.mark.parametrize("program", ["lerobot-eval", "lerobot-train"])
+def test_every_lerobot_command_uses_flags_and_paths_that_exist(program):
+    commands = lerobot_commands(program)
     flags = [flag.split("=", 1) for command in commands for flag in command]
     assert commands and {value for name, value in flags if name == "--env.type"} == {"language_table"}
     for name, value in flags:
         if name == "--policy.path" or (name == "--env.instances" and not value.startswith("outputs/")):
             assert (ROOT / value).is_dir(), f"{name}={value} is not a directory of this repository"
-    shown = [Path(sys.executable).with_name("lerobot-eval"), "--env.type=language_table", "--help"]
+    shown = [Path(sys.executable).with_name(program), "--env.type=language_table", "--help"]
     usage = subprocess.run(shown, capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert usage.returncode == 0, usage.stderr[-2000:]
-    known = set(re.findall(r"--(?:env|eval)\.\w+", usage.stdout))
-    assert {name for name, _ in flags if name.startswith(("--env.", "--eval."))} - {"--env.type"} <= known
+    known = set(re.findall(r"--[\w.]+", usage.stdout))
+    # The env's, the evaluation's and the top-level flags; a policy's or dataset's depend on its type.
+    checked = {name for name, _ in flags if not name.startswith(("--policy.", "--dataset."))}
+    assert checked <= known, f"{program} does not know {checked - known}"

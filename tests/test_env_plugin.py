@@ -2,6 +2,7 @@
 instances LeRobot's tools and our evaluator share."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -16,7 +17,9 @@ from lerobot_policy_tabletop_pointer import WEIGHTS
 
 from lerobot_contrast import load_task, make_plan, stats
 from lerobot_contrast.domains.language_table.oracle import PushOracle
+from lerobot_contrast.domains.language_table.task import LanguageTableTask
 from lerobot_contrast.record.plan_file import write_plan
+from lerobot_contrast.training.episodes import NoisyOracle, Simulator, open_dataset, record_episodes
 
 BIN = Path(sys.executable).parent
 
@@ -138,3 +141,25 @@ def test_lerobot_eval_and_our_standard_evaluation_agree_on_the_same_instances(tm
     ours_by_instance = dict(zip(results.instance_id, results.success, strict=True))
     same = [ours_by_instance[trial["base"]["id"]] == success for trial, success in zip(played, theirs, strict=True)]
     assert np.mean(same) >= 0.8, same
+
+
+@pytest.mark.slow
+def test_lerobot_train_evaluates_on_the_env_while_it_trains(tmp_path):
+    task, rng = LanguageTableTask(), np.random.default_rng(0)
+    dataset = open_dataset(tmp_path / "demos", "local/lt_demos")  # the learned default's kind of training data
+    record_episodes(dataset, Simulator(task), task.sample(2, rng), NoisyOracle(0.0, rng), 20)
+    dataset.finalize()
+    lerobot_train = [
+        BIN / "lerobot-train", "--dataset.repo_id=local/lt_demos", f"--dataset.root={tmp_path / 'demos'}",
+        "--policy.type=tabletop_pointer", "--policy.push_to_hub=false", "--policy.device=cpu", "--steps=2",
+        "--batch_size=2", "--save_freq=2", "--env_eval_freq=2", "--env.type=language_table", "--env.episode_length=10",
+        "--eval.n_episodes=1", "--eval.batch_size=1", "--num_workers=0", f"--output_dir={tmp_path / 'train'}",
+        "--wandb.enable=false",
+    ]  # fmt: skip
+    done = subprocess.run(
+        lerobot_train, capture_output=True, text=True, timeout=1800, env={**os.environ, "HF_HUB_OFFLINE": "1"}
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    logged = done.stdout + done.stderr  # the eval's aggregated metrics, as lerobot-train logs them
+    assert "'task_group': 'language_table'" in logged and "'n_episodes': 1" in logged
+    assert list((tmp_path / "train" / "eval" / "videos_step_000002" / "language_table_0").glob("*.mp4"))
