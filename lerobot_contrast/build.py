@@ -61,7 +61,7 @@ def check_robot_type(argv: list[str], unavailable: dict[str, str]) -> None:
 
 def needs_camera(cfg: EvalConfig) -> bool:
     """Scripted policies read the scene, not images: render only for a learned policy or a recording."""
-    return policy_entry(cfg.policy).reads_images or cfg.rerun or cfg.record_dataset
+    return policy_entry(cfg.policy, cfg.task).reads_images or cfg.rerun or cfg.record_dataset
 
 
 def choose_robot(cfg: EvalConfig) -> None:

@@ -76,6 +76,14 @@ for _entry in (
     ),
     PolicyEntry("random", "lerobot_contrast.policies.scripted:build", "uniform random end-effector deltas"),
     PolicyEntry(
+        "vln_navigator",
+        PRETRAINED_BUILD,
+        "the learned VLN default: a pixel navigator trained on the apartment's teacher demonstrations (weights ship)",
+        task="vln",
+        reads_images=True,
+        path=_shipped_weights("lerobot_policy_vln_navigator"),
+    ),
+    PolicyEntry(
         "route_follower",
         "lerobot_contrast.policies.route_follower:build",
         "the scripted navigator following the shortest route",
@@ -85,16 +93,25 @@ for _entry in (
     register(_entry)
 
 
-def policy_entry(args: PolicyArgs) -> PolicyEntry:
-    """--policy.path is a LeRobot policy; --policy.type a registered policy, else a LeRobot policy type."""
+# A task's own learned default, where it is not the tabletop's.
+TASK_DEFAULTS = {"vln": "vln_navigator", "vln_paper": "vln_navigator"}
+
+
+def default_policy(task: str | None) -> str:
+    return TASK_DEFAULTS.get(task or "", DEFAULT_POLICY)
+
+
+def policy_entry(args: PolicyArgs, task: str | None = None) -> PolicyEntry:
+    """--policy.path is a LeRobot policy; --policy.type a registered policy, else a LeRobot policy type; neither:
+    the learned default of `task` (a task name)."""
     if args.path is not None:
         return LEROBOT
-    return POLICIES.get(args.type or DEFAULT_POLICY, LEROBOT)
+    return POLICIES.get(args.type or default_policy(task), LEROBOT)
 
 
 def make_policy(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[str, str] | None = None) -> Policy:
     """The policy `args` names, built for `robot` and `task`; a one-line PolicyError where it cannot run there."""
-    entry = policy_entry(args)
+    entry = policy_entry(args, task.name)
     if rename_map and entry.build != PRETRAINED_BUILD:
         raise PolicyError(
             f"--rename_map: --policy.type={entry.name} reads the robot's own keys; --rename_map is for a LeRobot "
@@ -120,6 +137,7 @@ __all__ = [
     "PolicyArgs",
     "PolicyEntry",
     "PolicyError",
+    "default_policy",
     "make_policy",
     "policy_entry",
     "register",

@@ -92,7 +92,7 @@ def _run(cfg: EvalConfig) -> int:
 
 
 def _policy(cfg: EvalConfig, robot: Robot, task: Task) -> Policy:
-    if policy_entry(cfg.policy).build != PRETRAINED_BUILD:
+    if policy_entry(cfg.policy, cfg.task).build != PRETRAINED_BUILD:
         return make_policy(cfg.policy, robot, task, cfg.rename_map)
     import torch
 

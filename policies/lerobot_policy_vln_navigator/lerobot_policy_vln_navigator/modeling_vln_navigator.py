@@ -33,13 +33,15 @@ from lerobot_policy_vln_navigator.network import (
 )
 from lerobot_policy_vln_navigator.vocabulary import Tokenizer, build_vocabulary
 
-TURN_LEFT = COMMANDS.index("turn_left")
+FORWARD, TURN_LEFT, TURN_RIGHT = (COMMANDS.index(c) for c in ("forward", "turn_left", "turn_right"))
 
 
 def resize_image(image: Tensor, height: int, width: int) -> Tensor:
     """(B, 3, H, W) float image -> (B, 3, height, width), averaging pixels (the same op the training data used)."""
     if image.shape[-2:] == (height, width):
         return image
+    if image.shape[-2] % height == 0 and image.shape[-1] % width == 0:  # the same means, twice as fast
+        return F.avg_pool2d(image, (image.shape[-2] // height, image.shape[-1] // width))
     return F.interpolate(image, size=(height, width), mode="area")
 
 
@@ -88,6 +90,7 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
                 "targets": (int(first[i].argmax()), int(final[i].argmax())),
                 "phase": 0,
                 "searched": 0,
+                "explored": 0,
             }
             for i in range(first.shape[0])
         ]
@@ -115,15 +118,29 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
         if episode["phase"] == 0 and goal is not None and (goal[0] ** 2 + goal[1] ** 2) ** 0.5 <= self.config.reach_m:
             episode["phase"] = 1
             goal = memory.nearest(targets[1], state[:3])
-        if goal is None and episode["searched"] < self.config.search_turns:
-            episode["searched"] += 1
-            return TURN_LEFT
+        if goal is None:
+            return self._explore(episode, scan)
         known = torch.tensor([0.0 if goal is None else 1.0])
         dx, dy = (0.0, 0.0) if goal is None else goal
         features = goal_features(torch.tensor([dx]), torch.tensor([dy]), known)
         final = torch.tensor([float(episode["phase"])])
         logits = self.head(features, final, self._scan_input(scan.unsqueeze(0)), state[5:6])
         return int(logits.argmax(-1))
+
+    def _explore(self, episode: dict[str, Any], scan: Tensor) -> int:
+        """The subgoal has not been seen: look around, then head for open floor (the scanner's farthest ranges) and
+        look around again every `explore_steps` steps."""
+        if episode["searched"] < self.config.search_turns:
+            episode["searched"] += 1
+            return TURN_LEFT
+        episode["explored"] += 1
+        if episode["explored"] % self.config.explore_steps == 0:
+            episode["searched"] = 0
+        half = len(scan) // 2
+        ahead = float(scan[half - 2 : half + 2].min())
+        if ahead > self.config.open_m:
+            return FORWARD
+        return TURN_LEFT if float(scan[:half].mean()) >= float(scan[half:].mean()) else TURN_RIGHT
 
     def _scan_input(self, ranges: Tensor) -> Tensor:
         return ranges / self.config.max_range_m

@@ -44,7 +44,7 @@ def test_a_vln_episode_over_loopback_reaches_both_subgoals(host, tmp_path):
 def eval_flags(host, tmp_path, *flags: str) -> list[str]:
     ports = host.ports
     return [
-        "--task=vln", "--robot.type=locobot", f"--robot.port_command={ports['command']}",
+        "--task=vln_paper", "--robot.type=locobot", f"--robot.port_command={ports['command']}",
         f"--robot.port_observation={ports['observation']}", f"--robot.port_rpc={ports['rpc']}",
         f"--robot.calibration_dir={tmp_path / 'calibration'}", "--robot.camera_width=320", "--robot.camera_height=240",
         "--policy.type=route_follower", "--max_episode_steps=150", f"--output_dir={tmp_path / 'run'}", *flags,
@@ -98,7 +98,7 @@ def test_an_unreachable_robot_is_one_line_and_leaves_no_run_directory(tmp_path, 
     from tests.robots.locobot_helpers import free_port
 
     port = free_port()
-    flags = ["--task=vln", "--robot.type=locobot", f"--robot.port_rpc={port}", f"--robot.port_command={port}",
+    flags = ["--task=vln_paper", "--robot.type=locobot", f"--robot.port_rpc={port}", f"--robot.port_command={port}",
              "--robot.connect_timeout_s=0.5", "--policy.type=route_follower", f"--output_dir={tmp_path / 'run'}"]  # fmt: skip
     assert main(flags) == 2
     err = capsys.readouterr().err

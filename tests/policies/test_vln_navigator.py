@@ -1,0 +1,84 @@
+"""The learned VLN default (`vln_navigator`): it loads through LeRobot's factory from the shipped weights, reads only
+what a LoCoBot gives, trains on privileged targets, and makes progress on held-out arrangements in the simulator and
+over the loopback LoCoBot host."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from lerobot.configs import PreTrainedConfig
+from lerobot.policies import get_policy_class
+from lerobot_policy_vln_navigator import WEIGHTS, VLNNavigatorConfig, VLNNavigatorPolicy
+from lerobot_policy_vln_navigator.configuration_vln_navigator import PRIVILEGED_PREFIX
+from lerobot_robot_locobot import Locobot
+from lerobot_robot_locobot.host import HostThread
+
+from lerobot_contrast import PolicyArgs, load_task, make_policy
+from lerobot_contrast.domains.vln import sampler
+from lerobot_contrast.domains.vln.config_vln_sim import VLNSimConfig
+from lerobot_contrast.domains.vln.vln_sim import VLNSim
+from lerobot_contrast.policies import POLICIES, policy_entry
+from lerobot_contrast.policies.pretrained import PretrainedPolicy
+from lerobot_contrast.runner import RobotRunner
+from tests.policies.test_route_follower import context_for
+from tests.robots.locobot_helpers import FREE_PORTS, client_config
+
+TASK = load_task("vln")
+# A small fixed set of evaluation-split arrangements (training never sees one), and the progress the shipped
+# weights must keep on it: well below what they measure on 250 held-out arrangements (see TRAINING.md).
+FIXED = sampler.sample_arrangements(4, "eval", 77, TASK.radius)
+PROGRESS_FLOOR = 0.4
+
+
+def mean_progress(robot) -> float:
+    policy = make_policy(PolicyArgs(), robot, TASK)
+    robot.connect()
+    try:
+        runner = RobotRunner(robot, policy, TASK, operator=None, fps=None, max_steps=120)
+        return float(np.mean([runner(context_for(instance)).progress for instance in FIXED]))
+    finally:
+        robot.disconnect()
+
+
+def test_the_shipped_policy_loads_through_lerobots_factory_and_is_the_vln_default():
+    config = PreTrainedConfig.from_pretrained(str(WEIGHTS))
+    assert isinstance(config, VLNNavigatorConfig) and get_policy_class(config.type) is VLNNavigatorPolicy
+    assert not any(key.startswith(PRIVILEGED_PREFIX) for key in config.input_features)
+    assert sum(p.stat().st_size for p in WEIGHTS.iterdir()) < 20e6
+    assert policy_entry(PolicyArgs(), "vln") is POLICIES["vln_navigator"]
+    assert policy_entry(PolicyArgs(), "language_table") is not POLICIES["vln_navigator"]
+    policy = make_policy(PolicyArgs(), VLNSim(VLNSimConfig(camera_width=160, camera_height=120)), TASK)
+    assert isinstance(policy, PretrainedPolicy) and policy.name == "vln_navigator"
+
+
+def test_forward_trains_every_head_from_privileged_targets_that_are_never_inputs():
+    policy = VLNNavigatorPolicy(VLNNavigatorConfig(vocabulary=["go", "past", "the", "bed", "desk", "stop", "at"]))
+    b = 4
+    batch = {
+        "observation.images.front": torch.rand(b, 3, 48, 64),
+        "observation.state": torch.zeros(b, 6),
+        "action": torch.eye(4)[[0, 1, 2, 3]],
+        "task": ["go past the bed and stop at the desk"] * b,
+        PRIVILEGED_PREFIX + "column_class": torch.randint(0, 11, (b, 32)).float(),
+        PRIVILEGED_PREFIX + "column_range": torch.rand(b, 32) * 5 + 0.2,
+        PRIVILEGED_PREFIX + "first": torch.eye(10)[[0] * b],
+        PRIVILEGED_PREFIX + "final": torch.eye(10)[[4] * b],
+        PRIVILEGED_PREFIX + "goal": torch.randn(b, 2),
+        PRIVILEGED_PREFIX + "phase": torch.zeros(b, 1),
+    }
+    loss, figures = policy.forward(batch)
+    loss.backward()
+    assert torch.isfinite(loss) and {"scan_class", "scan_range", "first", "final", "action"} <= set(figures)
+    assert all(p.grad is not None for p in policy.parameters() if p.requires_grad)
+
+
+def test_the_shipped_policy_makes_progress_on_held_out_arrangements_in_vln_sim():
+    assert mean_progress(VLNSim(VLNSimConfig(camera_width=320, camera_height=240))) >= PROGRESS_FLOOR
+
+
+@pytest.mark.slow
+def test_the_shipped_policy_makes_progress_over_the_loopback_locobot_host(tmp_path):
+    with HostThread(FREE_PORTS) as host:
+        config = client_config(host.ports, tmp_path, camera_width=320, camera_height=240)
+        assert mean_progress(Locobot(config)) >= PROGRESS_FLOOR
