@@ -24,6 +24,7 @@ from lerobot.utils.feature_utils import build_dataset_frame, dataset_to_policy_f
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.policies.base import PolicyArgs, PolicyError
+from lerobot_contrast.record.third_party import quiet_hub_client
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
@@ -56,7 +57,8 @@ def _load_config(path: str, device: str | None) -> PreTrainedConfig:
     if looks_like_path(path) and not Path(path).expanduser().exists():
         raise PolicyLoadError(f"--policy.path: no such directory: {path}")
     try:
-        config = PreTrainedConfig.from_pretrained(path)
+        with quiet_hub_client():  # an unreachable Hub: this function's one line, not the client's retry lines
+            config = PreTrainedConfig.from_pretrained(path)
     except Exception as error:
         detail = " ".join(str(error).split())[:200]
         raise PolicyLoadError(

@@ -23,6 +23,7 @@ from huggingface_hub.errors import (
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.record.card import dataset_card
 from lerobot_contrast.record.run_lock import RunLock
+from lerobot_contrast.record.third_party import quiet_hub_client
 
 HUB_PREFIX = "hub:"
 REQUIRED = ("config.json", "results.parquet", "summary.json")
@@ -87,17 +88,25 @@ def _scrub(text: str, token: str | None) -> str:
 def _with_retries[T](call: Callable[[], T], what: str, api: HfApi, repo_id: str, attempts: int, backoff_s: float) -> T:
     for attempt in range(1, attempts + 1):
         try:
-            return call()
+            with quiet_hub_client():
+                return call()
         except HfHubHTTPError as error:
             status = error.response.status_code if error.response is not None else None
             if status not in RETRY_STATUS or attempt == attempts:
                 raise _translate(error, status, what, api, repo_id) from None
             wait = _retry_after(error.response) or backoff_s * 2 ** (attempt - 1)
+            # The Hub answered and asked us to wait: say so, since the wait may be long.
+            logger.warning(
+                "the Hub answered %s to %s; retrying in %.1f s (%d/%d)", status, what, wait, attempt, attempts
+            )
         except httpx.TransportError as error:
             if attempt == attempts:
-                raise HubError(f"cannot reach the Hub at {api.endpoint} ({type(error).__name__}) to {what}") from None
-            status, wait = type(error).__name__, backoff_s * 2 ** (attempt - 1)
-        logger.warning("the Hub answered %s to %s; retrying in %.1f s (%d/%d)", status, what, wait, attempt, attempts)
+                raise HubError(
+                    f"cannot reach the Hub at {api.endpoint} ({type(error).__name__}, {attempts} tries) to {what}; "
+                    "check the network connection (or HF_ENDPOINT) and try again"
+                ) from None
+            wait = backoff_s * 2 ** (attempt - 1)  # no answer at all: the one-line error says it, if it lasts
+            logger.debug("no answer from the Hub to %s; retrying in %.1f s (%d/%d)", what, wait, attempt, attempts)
         time.sleep(min(wait, MAX_WAIT_S))
     raise AssertionError("unreachable")
 

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+import rerun_bindings
 from PIL import Image
 
 from lerobot_contrast.contrast.errors import UserError
@@ -142,7 +143,7 @@ class RerunEpisodeRecorder:
         bounds = MapBounds.around(context, episode.poses, record.scene_after, self.task)
         recording = rr.RecordingStream(APPLICATION_ID, recording_id=f"{self.run_name}-trial{context.index:06d}")
         try:
-            recording.save(partial, default_blueprint=rrb.Blueprint(episode_views(episode.cameras, bounds)))
+            _save_with_layout(recording, partial, rrb.Blueprint(episode_views(episode.cameras, bounds)))
             self._log_episode(recording, episode, record, bounds)
             recording.flush(timeout_sec=FLUSH_TIMEOUT_S)
             recording.disconnect()  # writes the footer; only then is the file complete
@@ -151,6 +152,8 @@ class RerunEpisodeRecorder:
             raise _write_failed(partial, error) from None
         finally:
             partial.unlink(missing_ok=True)
+            del recording  # the last reference: only an unreferenced stream can be swept
+            _sweep_closed_streams()
         self._write_layout(episode.cameras)
         return EpisodeFiles(rerun_path=path.relative_to(self.run_dir).as_posix())
 
@@ -222,6 +225,36 @@ class RerunEpisodeRecorder:
         layout = self.directory / LAYOUT_FILE
         if not layout.exists():
             rrb.Blueprint(episode_views(cameras, None)).save(APPLICATION_ID, layout)
+
+
+def _save_with_layout(recording: rr.RecordingStream, path: Path, blueprint: rrb.Blueprint) -> None:
+    """`recording.save(path, default_blueprint=blueprint)`, less its leak: Rerun holds a layout in a blueprint
+    stream whose in-memory sink refers back to the stream, so that stream and its two threads live on for good
+    unless disconnected, and `save` keeps no handle to it. This keeps one and disconnects it."""
+    layout = rr.RecordingStream._from_native(
+        rerun_bindings.new_blueprint(
+            application_id=APPLICATION_ID, make_default=False, make_thread_default=False, default_enabled=True
+        )
+    )
+    try:
+        layout.set_time("blueprint", sequence=0)
+        blueprint._log_to_stream(layout)
+        memory = layout.memory_recording()
+        rerun_bindings.save(
+            path=str(path), default_blueprint=memory.storage, recording=recording.to_native(), write_footer=True
+        )
+    finally:
+        layout.disconnect()
+
+
+def _sweep_closed_streams() -> None:
+    """Join the threads (a writer and a batcher) of every episode stream nothing references any more. Rerun keeps
+    a dropped stream, threads and all, until the next `rr.init`; this is that sweep without a new global recording,
+    and the process's own global recording (LeRobot's live view, say) is kept."""
+    active = rr.get_global_data_recording()
+    rerun_bindings.flush_and_cleanup_orphaned_recordings()  # also unsets the global recording
+    if active is not None:
+        rr.set_global_data_recording(active)
 
 
 def _check_room(directory: Path, jpegs: dict[str, list[Future[bytes]]]) -> None:

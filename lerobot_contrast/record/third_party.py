@@ -1,5 +1,6 @@
 """Third-party output during a run: each library warning once, in one line, on the console; its full text (and the
-AV1 encoder's banners) in log files in the run directory, so the run's own progress and table stay readable."""
+AV1 encoder's banners) in log files in the run directory, so the run's own progress and table stay readable. While
+we talk to the Hub, the Hub client's own connection and retry warnings are dropped: our one-line error says it."""
 
 from __future__ import annotations
 
@@ -71,3 +72,16 @@ def third_party_output(run_dir: Path) -> Iterator[None]:
         root.removeHandler(handler)
         for existing in saved:
             existing.removeFilter(_own)
+
+
+@contextmanager
+def quiet_hub_client() -> Iterator[None]:
+    """Drop huggingface_hub's log records (a warning per failed request and per retry) while the block runs: when
+    the Hub cannot be reached or has no such repo, the caller's one-line error is the only line the user sees."""
+    hub_logger = logging.getLogger("huggingface_hub")
+    level = hub_logger.level
+    hub_logger.setLevel(logging.CRITICAL + 1)  # its modules log through child loggers, which inherit the level
+    try:
+        yield
+    finally:
+        hub_logger.setLevel(level)

@@ -4,6 +4,7 @@ Hub on 127.0.0.1: create, upload, re-upload, download, retried 429/503, a failed
 import logging
 import os
 import shutil
+import socket
 import subprocess
 import sys
 
@@ -173,3 +174,30 @@ def test_the_results_table_loads_with_datasets_from_the_hub(hub, run, tmp_path):
 
 def test_huggingface_hub_is_the_pinned_major_version():
     assert huggingface_hub.__version__.split(".")[0] == "1"
+
+
+def unreachable_hub_env(tmp_path) -> dict[str, str]:
+    """The environment of a command whose Hub is a port on 127.0.0.1 that nothing listens on."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    return {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(sys.path),
+        "HF_ENDPOINT": f"http://127.0.0.1:{port}",
+        "HF_HOME": str(tmp_path / "hf_home"),
+        "HF_TOKEN": "hf_DummyTokenForThisTest00000000",
+    }
+
+
+@pytest.mark.slow
+def test_an_unreachable_hub_is_our_one_line_without_the_clients_warnings_or_retries(run, tmp_path):
+    env = unreachable_hub_env(tmp_path)
+    publishing = [sys.executable, "-m", "lerobot_contrast.publish", str(run), "--repo_id=someone/nothing"]
+    loading = [sys.executable, "-m", "lerobot_contrast.eval", "--policy.path=someone/nothing", "--n_instances=1"]
+    loading.append(f"--output_dir={tmp_path / 'never'}")
+    for command, said in ((publishing, "error: cannot reach the Hub at "), (loading, "error: --policy.path: cannot ")):
+        result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+        assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr[-3000:]
+        assert result.stderr.startswith(said), result.stderr
+    assert not (tmp_path / "never").exists()

@@ -3,6 +3,7 @@ properties, the scene map and the perturbation text."""
 
 import dataclasses
 import json
+import os
 import shutil
 from types import SimpleNamespace
 
@@ -142,3 +143,21 @@ def test_rollback_keeps_the_episodes_the_journal_names_and_removes_the_rest(tmp_
     recorder.rollback([dataclasses.replace(record, rerun_path=files.rerun_path)])
     recorder.close()
     assert sorted(p.name for p in rerun.iterdir()) == ["episode_000000.rrd", LAYOUT_FILE]
+
+
+def threads() -> int:
+    return len(os.listdir("/proc/self/task"))
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="threads are counted from /proc")
+def test_an_episode_leaves_no_rerun_stream_or_thread_behind(tmp_path):
+    episodes, trials = Episodes(), contexts(perturbations=("LB1", "SB1"), n_bases=2)
+    recorder = RerunEpisodeRecorder(tmp_path, task=episodes.task)
+    episodes.run(recorder, trials[0], steps=3)
+    before = threads()
+    for trial in trials[1:]:
+        episodes.run(recorder, trial, steps=3)
+    assert threads() <= before
+    recorder.close()
+    reader, _ = read_rrd(tmp_path / "rerun" / f"episode_{trials[-1].index:06d}.rrd")
+    assert len(reader.recordings()) == 1 and len(reader.blueprints()) == 1
