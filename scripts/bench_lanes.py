@@ -28,14 +28,16 @@ def journal(run_dir: Path) -> list[dict]:
     return [{k: v for k, v in row.items() if k not in WALL_CLOCK} for row in rows]
 
 
-def timed_run(flags: list[str], run_dir: Path) -> float:
+def timed_run(flags: list[str], run_dir: Path) -> tuple[float, float]:
+    """Wall and CPU seconds (all of the process's threads) of one evaluation: on a shared machine the CPU time is
+    the fair comparison, as the share of the cores the run gets changes while it runs."""
     from lerobot_contrast.eval import main
 
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     code = main([*flags, f"--output_dir={run_dir}"])
     if code != 0:
         sys.exit(f"bench_lanes: the evaluation exited with {code}")
-    return time.perf_counter() - start
+    return time.perf_counter() - start, time.process_time() - cpu
 
 
 # CPU feature sets a machine may give torch's own kernels, oneDNN's convolutions and MKL's matrix products.
@@ -107,8 +109,9 @@ def main() -> None:
         print(f"first differing trial: {differing}\n  1 lane: {a[differing]}\n  lanes:  {b[differing]}")
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(
-        f"trials={len(a)} lanes={args.lanes} busy={str(args.busy).lower()} wall_1lane_s={one:.1f} "
-        f"wall_lanes_s={many:.1f} speedup={one / many:.2f} peak_rss_mb={rss_mb:.0f} "
+        f"trials={len(a)} lanes={args.lanes} busy={str(args.busy).lower()} cpu_1lane_s={one[1]:.1f} "
+        f"cpu_lanes_s={many[1]:.1f} cpu_speedup={one[1] / many[1]:.2f} peak_rss_mb={rss_mb:.0f} "
+        f"wall_1lane_s={one[0]:.1f} wall_lanes_s={many[0]:.1f} speedup={one[0] / many[0]:.2f} "
         f"identical={str(a == b).lower()}"
     )
 

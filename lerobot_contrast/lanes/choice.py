@@ -9,9 +9,10 @@ from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
 
-# Lanes `--lanes=auto` runs with a policy that steps all lanes in one call: the policy's calls then cost about a
-# third of one lane's each (tabletop_pointer on 2 cores); each lane holds up to one episode of camera frames
-# (200 steps x 173 kB = 35 MB) on top of the 0.5 GB that finished episodes may hold until their turn.
+# Lanes `--lanes=auto` runs with a policy that steps all lanes in one call. Each lane holds up to one episode of
+# camera frames (200 steps x 173 kB = 35 MB) on top of the 0.5 GB that finished episodes may hold until their turn.
+# On 2 shared cores 8 lanes took the CPU time of one (scripts/bench_lanes.py: 0.97x): what a step costs there is
+# per lane (frames to float, resizing, rendering, JPEG for Rerun), not per call.
 AUTO_LANES = 8
 EVAL_THREADS = 1
 
