@@ -82,7 +82,8 @@ def test_a_host_that_dies_mid_trial_is_given_up_in_seconds_and_said_aborted(tmp_
     backend.host_stop = thread.stop_event
     with thread as host:
         start = time.monotonic()
-        assert main(eval_flags(host, tmp_path, "--n_instances=1", "--perturbations=[L]", "--rerun=false", "--verbose=true")) == 2
+        flags = eval_flags(host, tmp_path, "--n_instances=1", "--perturbations=[L]", "--rerun=false", "--verbose=true")
+        assert main(flags) == 2
         took = time.monotonic() - start
     out, err = capsys.readouterr()
     # 2 s of silence (60 periods at 30 Hz), then 5 s of reconnecting, each try waiting up to its connect timeout.
