@@ -232,3 +232,66 @@ def test_a_run_on_a_small_disk_stops_in_one_line_and_completes_when_given_room(t
     assert (out / "leftovers").read_text() == ""
     assert (out / "again.rc").read_text().strip() == "0", again[-3000:]
     assert_same_run(out / "run", reference)
+
+
+def delete(path: Path) -> None:
+    if path.is_dir():
+        shutil.rmtree(path)
+    else:
+        path.unlink()
+
+
+def truncate(path: Path) -> None:
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+
+
+def files(run: Path) -> dict[str, bytes]:
+    """Every file of the run but its lock, which each writer stamps with its process."""
+    return {
+        p.relative_to(run).as_posix(): p.read_bytes()
+        for p in sorted(run.rglob("*"))
+        if p.is_file() and p.name != ".lock"
+    }
+
+
+# (what is damaged, how, the file the refusal names, what it says of it)
+DATASET_DAMAGE = {
+    "a deleted data parquet": ("dataset/data/chunk-000/file-002.parquet", delete, "", "is missing"),
+    "the data folder deleted": ("dataset/data", delete, "/chunk-000/file-000.parquet", "is missing"),
+    "a truncated data parquet": ("dataset/data/chunk-000/file-004.parquet", truncate, "", "is damaged"),
+    "a deleted video file": ("dataset/videos/*/chunk-000/file-003.mp4", delete, "", "is missing"),
+    "a truncated video file": ("dataset/videos/*/chunk-000/file-001.mp4", truncate, "", "is damaged"),
+    "a truncated episodes metadata file": (
+        "dataset/meta/episodes/chunk-000/file-002.parquet",
+        truncate,
+        "",
+        "is damaged",
+    ),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", DATASET_DAMAGE)
+def test_a_resume_refuses_a_dataset_that_lacks_what_the_journal_names_naming_the_file(tmp_path, reference, case):
+    pattern, damage, named, said = DATASET_DAMAGE[case]
+    run = tmp_path / "run"
+    shutil.copytree(reference, run)
+    (target,) = run.glob(pattern)
+    damage(target)
+    before = files(run)
+    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
+    assert resumed.returncode == 2 and resumed.stderr.count("\n") == 1, resumed.stderr[-3000:]
+    assert resumed.stderr.startswith(f"error: {target}{named} {said}"), resumed.stderr
+    assert "; restore it from a copy and resume, or run the evaluation again into a new --output_dir" in resumed.stderr
+    assert files(run) == before
+
+
+@pytest.mark.slow
+def test_a_resume_refuses_a_deleted_dataset_the_journal_names(tmp_path, reference):
+    run = tmp_path / "run"
+    shutil.copytree(reference, run)
+    shutil.rmtree(run / "dataset")
+    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
+    assert resumed.returncode == 2 and resumed.stderr.count("\n") == 1, resumed.stderr[-3000:]
+    assert resumed.stderr.startswith(f"error: {run / 'dataset'} is missing, but the journal names "), resumed.stderr
+    assert not (run / "dataset").exists()

@@ -1,8 +1,8 @@
 """Every trial as an episode of a LeRobotDataset v3 in `run_dir/dataset/`, with per-frame `eval.*` columns,
 `next.success` on the last frame and a contrast-set sidecar in `meta/contrast_eval/`. Frames are buffered while
 the episode runs and handed to LeRobot (validation, video encoding) when it ends, so the control loop only
-builds and copies each frame and no encoder competes with it for the CPU. Each saved episode is finalized at
-once, so a run killed at any point keeps every episode it finished."""
+builds and copies each frame and no encoder competes with it for the CPU. Each saved episode's files are closed at
+once, so a run killed at any point keeps every episode it finished, and the dataset stays open for the next."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from lerobot.datasets import LeRobotDataset
 from lerobot.utils.feature_utils import build_dataset_frame, hw_to_dataset_features
 
 from lerobot_contrast.contrast.trial import TrialContext, TrialRecord
-from lerobot_contrast.record.dataset_rollback import MOVE_ASIDE, DatasetError, roll_back
+from lerobot_contrast.record.dataset_rollback import RESTORE, DatasetError, roll_back
 from lerobot_contrast.record.observer import EpisodeFiles
 
 DATASET_DIR = "dataset"
@@ -31,6 +31,7 @@ SIDECAR_DIR = "meta/contrast_eval"
 SIDECAR_VERSION = 1
 # Run files copied into the sidecar when the dataset is closed: together they rebuild the plan.
 RUN_FILES = ("config.json", "plan.json", "summary.json")
+FULL_MB = 1e-6  # LeRobot's file-size limit that every file reaches: one episode per file
 EVAL_FEATURES = {
     "eval.instance_id": {"dtype": "string", "shape": (1,), "names": None},
     "eval.base_id": {"dtype": "string", "shape": (1,), "names": None},
@@ -145,9 +146,7 @@ class DatasetRecorder:
         # Saving maps the episode's frames with a progress bar; LeRobot re-enables bars after each load, so again.
         datasets.disable_progress_bars()
         self.dataset.save_episode()
-        # LeRobot writes parquet footers only when finalizing; the next episode resumes into new files.
-        self.dataset.finalize()
-        self.dataset = None
+        self._close_episode_files()
         self._append_sidecar(_episode_row(episode, context, record))
         return EpisodeFiles(dataset_episode=episode)
 
@@ -178,6 +177,13 @@ class DatasetRecorder:
         episodes = json.loads(info_path.read_text(encoding="utf-8"))["total_episodes"]
         info = {"version": SIDECAR_VERSION, "repo_id": self.repo_id, "episodes": episodes}
         (sidecar / "run.json").write_text(json.dumps(info, indent=2) + "\n", encoding="utf-8")
+
+    def _close_episode_files(self) -> None:
+        """Write the footers of the episode's data and metadata files now, so a run killed later keeps it. The
+        dataset stays open: reopening it would read every episode so far back from disk, for each new one. Its
+        chunk settings (`_open`) start the next episode in new files rather than rewriting these."""
+        self.dataset.writer.close_writer()
+        self.dataset.meta._close_writer()  # LeRobot's public finalize() closes it only once per dataset
 
     def _require_context(self, method: str) -> TrialContext:
         if self._context is None:
@@ -212,24 +218,28 @@ class DatasetRecorder:
         info_path = self.root / "meta" / "info.json"
         if info_path.exists() and json.loads(info_path.read_text(encoding="utf-8")).get("total_episodes", 0) > 0:
             if not any((self.root / "meta" / "episodes").glob("*/*.parquet")):  # else LeRobot would ask the Hub
-                raise DatasetError(f"{self.root} is damaged (the run stopped while saving an episode); {MOVE_ASIDE}")
+                raise DatasetError(f"{self.root} is damaged (the run stopped while saving an episode); {RESTORE}")
             dataset = LeRobotDataset.resume(
                 self.repo_id, root=self.root, streaming_encoding=self.use_videos, video_backend=video_backend()
             )
             _check_features(self.root, dataset.meta.features, features)
-            return dataset
-        if self.root.exists():  # created but no episode saved before the run stopped: start it afresh
-            shutil.rmtree(self.root)
-        return LeRobotDataset.create(
-            self.repo_id,
-            fps=self.fps,
-            features=features,
-            root=self.root,
-            robot_type=self.robot_type,
-            use_videos=self.use_videos,
-            streaming_encoding=self.use_videos,
-            video_backend=video_backend(),
-        )
+        else:
+            if self.root.exists():  # created but no episode saved before the run stopped: start it afresh
+                shutil.rmtree(self.root)
+            dataset = LeRobotDataset.create(
+                self.repo_id,
+                fps=self.fps,
+                features=features,
+                root=self.root,
+                robot_type=self.robot_type,
+                use_videos=self.use_videos,
+                streaming_encoding=self.use_videos,
+                video_backend=video_backend(),
+            )
+        # Any file, however small, is "full": every episode gets its own data, video and metadata files, so a
+        # finished episode's files are never reopened and a rollback removes whole files.
+        dataset.meta.update_chunk_settings(data_files_size_in_mb=FULL_MB, video_files_size_in_mb=FULL_MB)
+        return dataset
 
     def _append_sidecar(self, row: dict[str, Any]) -> None:
         path = self.root / SIDECAR_DIR / "episodes.jsonl"

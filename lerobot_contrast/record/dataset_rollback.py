@@ -1,8 +1,8 @@
 """Bring a run's LeRobotDataset back to the episodes its journal names. A run killed after saving an episode (or
 part of one) but before journaling its trial leaves that episode behind; the resumed run records it again.
 
-The recorder finalizes every episode and reopens the dataset for the next, so each episode has its own data,
-video and metadata files: rolling back removes files and rewrites the counts, it never cuts a file."""
+The recorder gives each episode its own data, video and metadata files: rolling back removes files and rewrites
+the counts, it never cuts a file. An episode the journal names whose files are missing or damaged is refused."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+import av
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -24,7 +25,11 @@ from lerobot_contrast.contrast.errors import UserError
 
 EPISODE_FOLDERS = ("data", "videos", "meta/episodes")
 SIDECAR_EPISODES = "meta/contrast_eval/episodes.jsonl"
-MOVE_ASIDE = "move it aside to record into a new dataset (the journal and the Rerun files are unaffected)"
+# A dataset that lacks what the journal names cannot be resumed into: its episodes would no longer be the trials'.
+RESTORE = (
+    "restore it from a copy and resume, or run the evaluation again into a new --output_dir "
+    "(the journal and the Rerun files are intact)"
+)
 
 
 class DatasetError(UserError):
@@ -32,20 +37,24 @@ class DatasetError(UserError):
 
 
 def roll_back(root: Path, keep: int) -> None:
-    """Keep the first `keep` episodes of the dataset at `root`; remove every file of a later or unfinished one."""
-    if not root.exists():
-        return
+    """Keep the first `keep` episodes of the dataset at `root`; remove every file of a later or unfinished one.
+    A kept episode with a file missing or damaged is refused in one line naming the file, and nothing changes."""
     if keep == 0:
-        shutil.rmtree(root)
+        if root.exists():
+            shutil.rmtree(root)
         return
+    if not root.is_dir():
+        raise DatasetError(f"{root} is missing, but the journal names {keep} episodes of it; {RESTORE}")
     rows = _kept_rows(root, keep)
     try:
         info = load_info(root)
     except (OSError, ValueError, KeyError, TypeError):
-        raise DatasetError(f"{root}: meta/info.json is missing or damaged; {MOVE_ASIDE}") from None
+        raise DatasetError(f"{root}: meta/info.json is missing or damaged; {RESTORE}") from None
+    videos = [k for k, v in info.features.items() if v["dtype"] == "video"]
+    _check_episode_files(root, info.data_path, info.video_path, videos, rows)
     wanted = {_relative(DEFAULT_EPISODES_PATH, row, "meta/episodes") for row in rows}
     wanted |= {_relative(info.data_path, row, "data") for row in rows}
-    for key in (k for k, v in info.features.items() if v["dtype"] == "video"):
+    for key in videos:
         wanted |= {_relative(info.video_path, row, f"videos/{key}", video_key=key) for row in rows}
     stray = [
         path
@@ -64,17 +73,63 @@ def roll_back(root: Path, keep: int) -> None:
 def _kept_rows(root: Path, keep: int) -> list[dict[str, Any]]:
     """The metadata rows of episodes 0 .. keep-1, or an error naming how many the dataset really holds."""
     rows: dict[int, dict[str, Any]] = {}
+    unreadable = []
     for path in sorted((root / "meta" / "episodes").glob("*/*.parquet")):
         try:
             table = pq.read_table(path)
         except (OSError, pa.ArrowException):  # written when a kill struck: an episode the journal never named
+            unreadable.append(path)
             continue
         rows.update((row["episode_index"], row) for row in table.to_pylist() if row["episode_index"] < keep)
     if sorted(rows) != list(range(keep)):
-        raise DatasetError(
-            f"{root} holds {len(rows)} complete episodes of the first {keep} that the journal names; {MOVE_ASIDE}"
-        )
+        held = f"{root} holds {len(rows)} complete episodes of the first {keep} that the journal names"
+        if unreadable:  # most likely the file that held the missing ones
+            raise DatasetError(f"{unreadable[0]} is damaged, and {held}; {RESTORE}")
+        raise DatasetError(f"{held}; {RESTORE}")
     return [rows[index] for index in range(keep)]
+
+
+def _check_episode_files(
+    root: Path, data_path: str, video_path: str, videos: list[str], rows: list[dict[str, Any]]
+) -> None:
+    """Every kept episode's frames in its data file, and its video files there and readable; else one line
+    naming the first file that is not."""
+    frames: dict[Path, set[int] | None] = {}
+    for row in rows:
+        path = root / _relative(data_path, row, "data")
+        if path not in frames:
+            frames[path] = _frame_indexes(path)
+        held = frames[path]
+        if held is None or not set(range(row["dataset_from_index"], row["dataset_to_index"])) <= held:
+            _refuse(path, row)
+        for key in videos:
+            video = root / _relative(video_path, row, f"videos/{key}", video_key=key)
+            if not _readable_video(video, row[f"videos/{key}/to_timestamp"]):
+                _refuse(video, row)
+
+
+def _frame_indexes(path: Path) -> set[int] | None:
+    """The global frame indexes a data file holds; None when it is missing or cannot be read."""
+    try:
+        return set(pq.read_table(path, columns=["index"]).column("index").to_pylist())
+    except (OSError, pa.ArrowException):
+        return None
+
+
+def _readable_video(path: Path, until_s: float) -> bool:
+    """Whether the video opens and lasts as long as the episodes it holds (within a frame or so)."""
+    try:
+        with av.open(str(path)) as container:
+            stream = container.streams.video[0]
+            duration = stream.duration * stream.time_base if stream.duration else container.duration / av.time_base
+            return float(duration) >= until_s - 2 / float(stream.average_rate or 1)
+    except (OSError, av.error.FFmpegError, IndexError, TypeError):
+        return False
+
+
+def _refuse(path: Path, row: dict[str, Any]) -> None:
+    state = "is missing" if not path.exists() else "is damaged"
+    raise DatasetError(f"{path} {state} (it holds episode {row['episode_index']}, which the journal names); {RESTORE}")
 
 
 def _relative(pattern: str, row: dict[str, Any], prefix: str, **names: str) -> str:

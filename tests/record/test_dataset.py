@@ -189,7 +189,7 @@ def test_a_dataset_damaged_while_saving_is_refused_with_advice_not_fetched_from_
     recorder.close()
     shutil.rmtree(tmp_path / "dataset" / "meta" / "episodes")
     resumed = DatasetRecorder(tmp_path, fps=10)
-    with pytest.raises(DatasetError, match="is damaged .*; move it aside"):
+    with pytest.raises(DatasetError, match="is damaged .*; restore it from a copy"):
         resumed.start(context, FEATURES, POSE_KEYS)
     resumed.close()
 
@@ -236,5 +236,7 @@ def test_a_journal_naming_episodes_the_dataset_lacks_is_refused_with_advice(tmp_
     recorder.close()
     record = scored(context, Outcome(True, 4, 0.04, context.instance.scene, 0.4), 0.0, 0.0)
     named = [dataclasses.replace(record, dataset_episode=files.dataset_episode + 1)]
-    with pytest.raises(DatasetError, match=r"holds 1 complete episodes of the first 2 that the journal names; move it"):
+    with pytest.raises(
+        DatasetError, match=r"holds 1 complete episodes of the first 2 that the journal names; restore it"
+    ):
         DatasetRecorder(tmp_path, fps=10, repo_id=REPO_ID).rollback(named)
