@@ -30,7 +30,6 @@ SMALL = {
     "cells": [
         {"name": "standard", "strategy": "standard"},
         {"name": "lb", "strategy": "contrast", "perturbations": ["LB1", "LB2"]},
-        {"name": "broken", "policy": {"path": "/nonexistent/policy"}},
     ],
 }
 # Cells long enough (about 30 trials each) to be killed in the middle.
@@ -93,11 +92,15 @@ def trials_recorded(run_dir: Path) -> int:
 
 
 def test_a_sweep_runs_every_cell_once_gathers_results_and_reports_a_bad_cell_in_one_line(local_ray, tmp_path, capsys):
-    path, out = write(tmp_path, SMALL), tmp_path / "out"
+    empty = tmp_path / "empty_policy"  # no policy in it: it passes the sweep's up-front checks and fails in its cells
+    empty.mkdir()
+    with_broken = [*SMALL["cells"], {"name": "broken", "policy": {"path": str(empty)}}]
+    path, out = write(tmp_path, {**SMALL, "cells": with_broken}), tmp_path / "out"
     assert main([str(path), f"--output_dir={out}"]) == 1
     lines = capsys.readouterr().out.splitlines()
     for seed in (0, 1):
-        assert f"broken,seed={seed}: failed: --policy.path: no such directory: /nonexistent/policy" in lines
+        failed = f"broken,seed={seed}: failed: --policy.path: cannot load a LeRobot policy config from '{empty}'"
+        assert any(line.startswith(failed) for line in lines), lines
     assert sum("broken" in line for line in lines) == 2
     assert lines[-1] == f"sweep: 4 of 6 cells complete, 2 failed; results: {out / 'results.parquet'}"
     cells = index(out)

@@ -130,7 +130,7 @@ def test_bad_input_is_refused_before_any_request(hub, run, tmp_path, capsys):
     with pytest.raises(HubError, match="no config.json, results.parquet, summary.json; pass a run directory"):
         publish_run(tmp_path, REPO, endpoint=hub.endpoint)
     assert publish.main([str(run)]) == 2
-    assert "the following arguments are required: --repo_id" in capsys.readouterr().err
+    assert "--repo_id is required" in capsys.readouterr().err
     assert hub.requests == []
 
 
