@@ -1,6 +1,8 @@
 """Any LeRobot policy through --policy.path: loading, the instruction as `task`, language-blindness under ΔL."""
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -141,10 +143,17 @@ def test_rename_map_feeds_robot_keys_to_the_policys_features(tmp_path, capsys):
     assert main([*base, rename, f"--output_dir={tmp_path / 'b'}"]) == 0
 
 
-def test_a_policy_path_that_holds_no_policy_is_a_one_line_error(tmp_path, capsys):
-    assert main(["--n_instances=1", f"--policy.path={tmp_path}", f"--output_dir={tmp_path / 'run'}"]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--policy.path" in err and "save_pretrained" in err
+def test_a_policy_path_that_holds_no_policy_is_a_one_line_error(tmp_path):
+    # A process of its own, so that LeRobot's log lines, which go to the real stderr, would show.
+    command = [sys.executable, "-m", "lerobot_contrast.eval", "--n_instances=1", "--rerun=false"]
+    done = subprocess.run(
+        [*command, f"--policy.path={tmp_path}", f"--output_dir={tmp_path / 'run'}"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "--policy.path" in done.stderr and "save_pretrained" in done.stderr, done.stderr
 
 
 def test_loading_refuses_a_robot_without_the_policys_camera(act_path):

@@ -57,7 +57,8 @@ def _load_config(path: str, device: str | None) -> PreTrainedConfig:
     if looks_like_path(path) and not Path(path).expanduser().exists():
         raise PolicyLoadError(f"--policy.path: no such directory: {path}")
     try:
-        with quiet_hub_client():  # an unreachable Hub: this function's one line, not the client's retry lines
+        # An unreachable Hub or a directory without a config: this function's one line, not the libraries' lines.
+        with quiet_hub_client("lerobot.configs"):
             config = PreTrainedConfig.from_pretrained(path)
     except Exception as error:
         detail = " ".join(str(error).split())[:200]

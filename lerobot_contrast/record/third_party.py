@@ -75,13 +75,16 @@ def third_party_output(run_dir: Path) -> Iterator[None]:
 
 
 @contextmanager
-def quiet_hub_client() -> Iterator[None]:
-    """Drop huggingface_hub's log records (a warning per failed request and per retry) while the block runs: when
-    the Hub cannot be reached or has no such repo, the caller's one-line error is the only line the user sees."""
-    hub_logger = logging.getLogger("huggingface_hub")
-    level = hub_logger.level
-    hub_logger.setLevel(logging.CRITICAL + 1)  # its modules log through child loggers, which inherit the level
+def quiet_hub_client(*also: str) -> Iterator[None]:
+    """Drop huggingface_hub's log records (a warning per failed request and per retry), and those of the loggers
+    named in `also`, while the block runs: when the Hub cannot be reached or has no such repo, the caller's one-line
+    error is the only line the user sees."""
+    loggers = [logging.getLogger(name) for name in ("huggingface_hub", *also)]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:  # their modules log through child loggers, which inherit the level
+        logger.setLevel(logging.CRITICAL + 1)
     try:
         yield
     finally:
-        hub_logger.setLevel(level)
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
