@@ -9,10 +9,6 @@ ones from a seed never used for training (`sampler`).
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import subprocess
-import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -24,7 +20,7 @@ from lerobot_contrast.domains.vln.task import SUCCESS_RADIUS_M
 from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.training.nav_episodes import NavSimulator, SlippingTeacher, open_dataset, record_episodes
 from lerobot_contrast.training.nav_learner import NavLearner, NavMixture, closed_loop, select_action_ms
-from lerobot_contrast.training.recipe import Progress, RecipeError, _shipped_files
+from lerobot_contrast.training.recipe import Progress, _shipped_files, lerobot_train
 
 REPO_ID = "local/vln_navigator_demos"
 
@@ -84,40 +80,6 @@ def _record(recipe: NavRecipe, actor, instances, label: str) -> None:
     )
 
 
-def _train(recipe: NavRecipe, round_index: int) -> None:
-    out = recipe.train_dir(round_index)
-    steps = recipe.steps[round_index]
-    if (out / "checkpoints").exists():
-        args = ["--resume=true", f"--config_path={recipe.model(round_index) / 'train_config.json'}"]
-    else:
-        shutil.rmtree(out, ignore_errors=True)  # lerobot-train refuses an existing output dir without a checkpoint
-        policy = (
-            ["--policy.type=vln_navigator"] if round_index == 0 else [f"--policy.path={recipe.model(round_index - 1)}"]
-        )
-        args = [
-            f"--dataset.repo_id={REPO_ID}",
-            f"--dataset.root={recipe.dataset}",
-            *policy,
-            "--policy.push_to_hub=false",
-            f"--policy.device={recipe.device}",
-            f"--steps={steps}",
-            f"--batch_size={recipe.batch_size}",
-            f"--save_freq={max(1, min(1000, steps))}",
-            f"--num_workers={recipe.num_workers}",
-            f"--seed={recipe.seed + round_index}",
-            f"--output_dir={out}",
-            "--log_freq=100",
-            "--wandb.enable=false",
-        ]
-    command = [str(Path(sys.executable).parent / "lerobot-train"), *args]
-    env = {**os.environ, "HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": str(recipe.train_threads)}
-    log_path = recipe.output_dir / f"train_{round_index}.log"
-    with open(log_path, "a") as log:
-        status = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT, env=env).returncode
-    if status != 0:
-        raise RecipeError(f"lerobot-train exited with {status} in round {round_index}; its output is in {log_path}")
-
-
 def run(recipe: NavRecipe) -> dict[str, float]:
     """All phases (skipping finished ones), then the closed-loop check of the final policy."""
     import torch
@@ -138,7 +100,7 @@ def _phases(recipe: NavRecipe) -> dict[str, float]:
         progress.finish("demos")
     for round_index in range(len(recipe.betas) + 1):
         if not progress.done(f"train_{round_index}"):
-            _train(recipe, round_index)
+            lerobot_train(recipe, round_index, "vln_navigator", REPO_ID)
             progress.finish(f"train_{round_index}")
         if round_index < len(recipe.betas) and not progress.done(f"dagger_{round_index}"):
             rng = np.random.default_rng([recipe.seed, round_index + 1])

@@ -16,6 +16,7 @@ import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -113,21 +114,19 @@ def _record(recipe: Recipe, actor, instances, label: str) -> None:
     )
 
 
-def _train(recipe: Recipe, round_index: int) -> None:
+def lerobot_train(recipe: Any, round_index: int, policy_type: str, repo_id: str) -> None:
+    """One training run of a recipe (this one or the navigator's) through `lerobot-train`: from scratch in round 0,
+    else from the previous round's model; resumed from its last checkpoint when one is there."""
     out = recipe.train_dir(round_index)
-    last = out / "checkpoints" / "last" / "pretrained_model"
     steps = recipe.steps[round_index]
     if (out / "checkpoints").exists():
-        args = ["--resume=true", f"--config_path={last / 'train_config.json'}"]
+        args = ["--resume=true", f"--config_path={_last_model(recipe, round_index) / 'train_config.json'}"]
     else:
         shutil.rmtree(out, ignore_errors=True)  # lerobot-train refuses an existing output dir without a checkpoint
-        policy = (
-            ["--policy.type=tabletop_pointer"]
-            if round_index == 0
-            else [f"--policy.path={recipe.train_dir(round_index - 1) / 'checkpoints' / 'last' / 'pretrained_model'}"]
-        )
+        previous = _last_model(recipe, round_index - 1)
+        policy = [f"--policy.type={policy_type}"] if round_index == 0 else [f"--policy.path={previous}"]
         args = [
-            f"--dataset.repo_id={REPO_ID}",
+            f"--dataset.repo_id={repo_id}",
             f"--dataset.root={recipe.dataset}",
             *policy,
             "--policy.push_to_hub=false",
@@ -148,6 +147,10 @@ def _train(recipe: Recipe, round_index: int) -> None:
         status = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT, env=env).returncode
     if status != 0:
         raise RecipeError(f"lerobot-train exited with {status} in round {round_index}; its output is in {log_path}")
+
+
+def _last_model(recipe: Any, round_index: int) -> Path:
+    return recipe.train_dir(round_index) / "checkpoints" / "last" / "pretrained_model"
 
 
 def run(recipe: Recipe) -> dict[str, float]:
@@ -172,7 +175,7 @@ def _phases(recipe: Recipe) -> dict[str, float]:
         progress.finish("demos")
     for round_index in range(len(recipe.betas) + 1):
         if not progress.done(f"train_{round_index}"):
-            _train(recipe, round_index)
+            lerobot_train(recipe, round_index, "tabletop_pointer", REPO_ID)
             progress.finish(f"train_{round_index}")
         if round_index < len(recipe.betas) and not progress.done(f"dagger_{round_index}"):
             rng = np.random.default_rng([recipe.seed, round_index + 1])
