@@ -10,11 +10,10 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import draccus
 from lerobot_policy_vln_navigator import WEIGHTS
 
+from lerobot_contrast.training.command import train_command
 from lerobot_contrast.training.nav_recipe import NavRecipe, run
-from lerobot_contrast.training.recipe import RecipeError, ship
 
 
 @dataclass
@@ -25,22 +24,5 @@ class TrainNavPolicy:
     weights_dir: Path = WEIGHTS
 
 
-def main(config: TrainNavPolicy) -> None:
-    figures = run(config.recipe)
-    if config.ship:
-        ship(config.recipe, config.weights_dir)
-    print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in figures.items()))
-
-
 if __name__ == "__main__":
-    try:
-        parsed = draccus.parse(TrainNavPolicy)
-    except draccus.utils.ParsingError as error:
-        cause = error.__cause__ if isinstance(error.__cause__, ValueError) else error
-        print(f"error: {cause}", file=sys.stderr)
-        sys.exit(2)
-    try:
-        main(parsed)
-    except RecipeError as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(1)
+    sys.exit(train_command(TrainNavPolicy, run))
