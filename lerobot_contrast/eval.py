@@ -41,7 +41,7 @@ from lerobot_contrast.flags import (
 )
 from lerobot_contrast.lanes.choice import choose_lanes, parse_lanes, use_threads
 from lerobot_contrast.operator_console import OperatorConsole, SessionStopped
-from lerobot_contrast.policies import Policy, make_policy
+from lerobot_contrast.policies import Policy, default_policy, make_policy
 from lerobot_contrast.progress import RunProgress, header_lines
 from lerobot_contrast.record.compare_run import compare_rule
 from lerobot_contrast.record.journal import read_journal
@@ -222,7 +222,7 @@ def equipped(
         rerun_aborted=cfg.rerun_aborted,
         config=config_json(cfg),
         config_defaults=config_json(EvalConfig()),
-        labels={"strategy": cfg.strategy, "policy": cfg.policy.label},
+        labels={"strategy": cfg.strategy, "policy": cfg.policy.path or cfg.policy.type or default_policy(cfg.task)},
         verbose=True,
         lanes=choose_lanes(
             cfg.lanes, robot, policy, operator=operator is not None, fps=run_fps(cfg, robot),

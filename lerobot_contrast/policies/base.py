@@ -57,10 +57,6 @@ class PolicyArgs:
     # its base instruction instead (0 = reads every instruction).
     language_blind: float = 0.0
 
-    @property
-    def label(self) -> str:
-        return self.path or self.type or DEFAULT_POLICY
-
 
 # The planar end-effector deltas of the simulated tabletop, which the scripted tabletop baselines send.
 TABLETOP_ACTIONS = {"delta_x", "delta_y"}

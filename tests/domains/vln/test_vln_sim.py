@@ -14,6 +14,7 @@ from navigation_protocol import CAMERA, DISCRETE_KEYS, STATE_KEYS, one_hot
 from lerobot_contrast.domains.vln import VLNTask
 from lerobot_contrast.domains.vln.config_vln_sim import VLNSimConfig
 from lerobot_contrast.domains.vln.vln_sim import VLNSim
+from lerobot_contrast.eval import main as eval_main
 from lerobot_contrast.policies.route_follower import RouteFollower
 from lerobot_contrast.runner import RobotRunner
 from tests.policies.test_route_follower import context_for
@@ -87,3 +88,10 @@ def test_the_eval_cli_runs_vln_in_simulation_with_the_locobot_plugin_unimportabl
     assert [r["perturbation"] for r in records] == [None, "L", "SB"]
     assert all(r["status"] == "done" and r["success"] and r["progress"] == 1.0 for r in records)
     assert json.loads((tmp_path / "run" / "config.json").read_text())["robot"]["type"] == "vln_sim"
+
+
+def test_a_vln_run_without_a_policy_flag_is_labelled_with_the_learned_navigator(tmp_path):
+    run = tmp_path / "run"
+    flags = ["--task=vln_paper", "--n_instances=1", "--strategy=standard", "--max_episode_steps=5", "--rerun=false"]
+    assert eval_main([*flags, f"--output_dir={run}"]) == 0
+    assert json.loads((run / "summary.json").read_text())["settings"]["policy"] == "vln_navigator"
