@@ -103,7 +103,7 @@ def test_the_dry_run_prints_the_plan_with_moves_and_planned_cost():
     )
     assert result.returncode == 0, result.stderr
     out = result.stdout
-    assert out.startswith("[   0] original  so101_blocks-0000  stage=reset")
+    assert out.startswith("[   1] original  so101_blocks-0000  stage=reset")
     assert re.search(r"move (red|green|blue)_cube +\(\+0\.\d{3}, \+0\.\d{3}\) -> \([+-]0\.\d{3}, [+-]0\.\d{3}\)", out)
     assert "ΔLB2" in out and "ΔSB" in out
     assert re.search(r"plan: \d+ trials \(\d+ not applicable\) of 400 planned, planned cost \d+\.\d\d m", out)
