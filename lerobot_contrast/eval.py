@@ -39,7 +39,7 @@ from lerobot_contrast.flags import (
     robot_type,
     wants_help,
 )
-from lerobot_contrast.lanes.choice import choose_lanes, parse_lanes, use_threads
+from lerobot_contrast.lane_choice import choose_lanes, parse_lanes, use_threads
 from lerobot_contrast.operator_console import OperatorConsole, SessionStopped
 from lerobot_contrast.policies import Policy, default_policy, make_policy
 from lerobot_contrast.progress import RunProgress, header_lines
@@ -247,7 +247,7 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
     connect(robot)
     try:
         operator = make_operator(cfg, robot, task, planned.cost_model.unit)
-        use_threads()  # chosen, not inherited from the machine (lanes/choice.py)
+        use_threads()  # chosen, not inherited from the machine (lane_choice.py)
         policy = make_policy(cfg.policy, robot, task, cfg.rename_map)  # one that cannot load leaves no run directory
         cfg.output_dir = cfg.output_dir or default_output_dir(cfg, task)
         return run_and_report(cfg, equipped(cfg, planned, robot, policy, operator))

@@ -77,7 +77,7 @@ class Evaluation:
     progress: Callable[[TrialRecord], None] | None = None  # told of each trial once recorded (progress.RunProgress)
     stop: StopRule | None = None  # sequential stopping rules, checked after every trial
     adaptive: bool = False  # --order=adaptive: each next trial is chosen from the outcomes so far (adaptive.py)
-    lanes: int = 1  # simulated chains of trials run side by side (lanes/), with the same results as one
+    lanes: int = 1  # simulated chains of trials run side by side (lane_runner.py), with the same results as one
     policy_for: Callable[[Any], Policy] | None = None  # the policy for another lane's robot (None: a copy)
 
     @property
@@ -245,7 +245,7 @@ def _executor(ev: Evaluation, state: LoopState) -> Execute:
     if ev.robot is None or ev.policy is None:
         raise UserError("an Evaluation needs a robot and a policy, or `execute` to run each trial")
     if ev.lanes > 1 and ev.operator is None and not ev.adaptive and getattr(ev.robot, "simulated", False):
-        from lerobot_contrast.lanes.runner import LaneRunner
+        from lerobot_contrast.lane_runner import LaneRunner
 
         return LaneRunner(
             ev.task, ev.plan[state.next_index :], ev.seed, (state.scene, state.previous), ev.robot, ev.lanes,

@@ -13,8 +13,8 @@ from lerobot_contrast.build import make_robot, register_robots
 from lerobot_contrast.config import EvalConfig, StopArgs
 from lerobot_contrast.eval import planned_evaluation
 from lerobot_contrast.evaluation import run
-from lerobot_contrast.lanes.choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
-from lerobot_contrast.lanes.runner import chains
+from lerobot_contrast.lane_choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
+from lerobot_contrast.lane_runner import chains
 from lerobot_contrast.policies import PolicyArgs, make_policy
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
 

@@ -84,10 +84,15 @@ class BatchedLanes:
         return False
 
 
+def batches_lanes(policy: Policy) -> bool:
+    """Whether `policy` (through --policy.noise_std's wrapper) answers all lanes in one call."""
+    inner = policy.policy if isinstance(policy, NoisyPolicy) else policy
+    return getattr(inner, "batches_lanes", False)
+
+
 def lane_policy(policy: Policy, robots: Sequence[Any], policy_for: PolicyFor | None = None) -> LanePolicy:
     """The policy for a lane per robot in `robots` (the first is `policy`'s own)."""
-    inner = policy.policy if isinstance(policy, NoisyPolicy) else policy
-    if getattr(inner, "batches_lanes", False):
+    if batches_lanes(policy):
         return BatchedLanes(policy, len(robots))
     return CopiedLanes(policy, robots, policy_for)
 

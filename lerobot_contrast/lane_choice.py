@@ -8,6 +8,7 @@ from contextlib import suppress
 from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.lane_seats import batches_lanes
 
 # Lanes `--lanes=auto` runs with a policy that steps all lanes in one call. Each lane holds up to one episode of
 # camera frames (200 steps x 173 kB = 35 MB) on top of the 0.5 GB that finished episodes may hold until their turn.
@@ -51,8 +52,7 @@ def choose_lanes(
         return 1
     if requested is not None:
         return requested
-    inner = getattr(policy, "policy", policy)  # through --policy.noise_std's wrapper
-    return AUTO_LANES if getattr(inner, "batches_lanes", False) else 1
+    return AUTO_LANES if batches_lanes(policy) else 1
 
 
 def use_threads(threads: int = EVAL_THREADS) -> None:

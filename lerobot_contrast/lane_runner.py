@@ -18,7 +18,7 @@ from lerobot_contrast.contrast.staging import Staged, materialize, trial_rng
 from lerobot_contrast.contrast.strategy import PlannedTrial
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
-from lerobot_contrast.lanes.seats import PolicyFor, Seat, lane_policy
+from lerobot_contrast.lane_seats import PolicyFor, Seat, lane_policy
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver, QuietObserver
 from lerobot_contrast.runner import RobotRunner
