@@ -153,7 +153,9 @@ def test_a_policy_path_that_holds_no_policy_is_a_one_line_error(tmp_path):
         timeout=300,
     )
     assert done.returncode == 2
-    assert done.stderr.count("\n") == 1 and "--policy.path" in done.stderr and "save_pretrained" in done.stderr, done.stderr
+    assert done.stderr.count("\n") == 1 and "--policy.path" in done.stderr and "save_pretrained" in done.stderr, (
+        done.stderr
+    )
 
 
 def test_loading_refuses_a_robot_without_the_policys_camera(act_path):
@@ -166,7 +168,10 @@ def test_loading_refuses_a_robot_without_the_policys_camera(act_path):
 def test_a_path_like_policy_path_that_exists_nowhere_is_no_such_directory(tmp_path, capsys, value):
     assert main(["--n_instances=1", f"--policy.path={value}", f"--output_dir={tmp_path / 'run'}"]) == 2
     err = capsys.readouterr().err
-    assert err == f"error: --policy.path: no such directory: {value}\n"
+    assert (
+        err
+        == f"error: --policy.path: no such directory: {value}; give a directory written by save_pretrained or a Hub repo id\n"
+    )
     assert not (tmp_path / "run").exists()
 
 
