@@ -8,13 +8,12 @@ from contextlib import suppress
 from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.lane_seats import batches_lanes
 
-# Lanes `--lanes=auto` runs with a policy that steps all lanes in one call. Each lane holds up to one episode of
-# camera frames (200 steps x 173 kB = 35 MB) on top of the 0.5 GB that finished episodes may hold until their turn.
-# On 2 shared cores 8 lanes took the CPU time of one (scripts/bench_lanes.py: 0.97x): what a step costs there is
-# per lane (frames to float, resizing, rendering, JPEG for Rerun), not per call.
-AUTO_LANES = 8
+# Lanes `--lanes=auto` runs with. One for now: on 2 shared cores 8 lanes of the learned default took the CPU time of
+# one (scripts/bench_lanes.py: 0.97x), since what a step costs there is per lane (frames to float, resizing,
+# rendering, JPEG for Rerun), not per call; and an episode a robot aborts cannot yet be replayed to the Rerun observer
+# from a lane. `--lanes=N` asks for N.
+AUTO_LANES = 1
 EVAL_THREADS = 1
 
 
@@ -36,8 +35,7 @@ def choose_lanes(
     value: str | int, robot: Any, policy: Any, *, operator: bool, fps: float | None, max_episode_s: float | None = None
 ) -> int:
     """The lanes to run: one on hardware, with an operator, at a fixed rate or with episodes limited in wall time
-    (lanes stretch each episode's wall time); with auto, AUTO_LANES where the policy answers all lanes in one call
-    (other policies gain nothing from stepping side by side)."""
+    (lanes stretch each episode's wall time); with auto, AUTO_LANES."""
     requested = parse_lanes(value)
     why = (
         "an operator stages it" if operator
@@ -52,7 +50,7 @@ def choose_lanes(
         return 1
     if requested is not None:
         return requested
-    return AUTO_LANES if batches_lanes(policy) else 1
+    return AUTO_LANES
 
 
 def use_threads(threads: int = EVAL_THREADS) -> None:

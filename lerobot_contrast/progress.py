@@ -32,7 +32,7 @@ def header_lines(settings: dict[str, object], run_dir: Path, resume: str) -> lis
 
 class RunProgress:
     """Told of every trial as the journal records it (`Evaluation.progress`); shows done/planned, trials run and
-    not applicable, cost spent and time left. With `verbose`, also today's line per trial."""
+    not applicable, cost spent and time left. With `verbose`, also today's line per trial (an aborted one always)."""
 
     def __init__(
         self,
@@ -82,7 +82,7 @@ class RunProgress:
         self.counts[record.status] += 1
         if record.status in ("done", "aborted"):
             self.spent = record.cumulative_cost
-        if self.verbose:
+        if self.verbose or record.status == "aborted":  # an aborted trial says why, whether or not lines are asked for
             self.console.print(trial_line(record, self.unit), soft_wrap=True, markup=False, highlight=False)
         if self.bar is not None:
             self.bar.update(self.task, completed=self.completed, description=self.counts_text())

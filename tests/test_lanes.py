@@ -15,6 +15,7 @@ from lerobot_contrast.eval import planned_evaluation
 from lerobot_contrast.evaluation import run
 from lerobot_contrast.lane_choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
 from lerobot_contrast.lane_runner import chains
+from lerobot_contrast.lane_seats import batches_lanes
 from lerobot_contrast.policies import PolicyArgs, make_policy
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
 
@@ -135,15 +136,16 @@ def test_hardware_runs_one_lane_and_says_so_for_more():
     assert choose_lanes("3", simulator, None, operator=False, fps=None) == 3
 
 
-def test_auto_lanes_batch_the_learned_default_only(tmp_path):
+def test_the_learned_default_answers_every_lane_in_one_call_and_auto_runs_one_lane(tmp_path):
     cfg = EvalConfig(n_instances=1)
     robot = make_robot(cfg)
     robot.connect()
     try:
         task = planned_evaluation(cfg).task
         learned = make_policy(PolicyArgs(), robot, task)
-        assert choose_lanes("auto", robot, learned, operator=False, fps=None) == AUTO_LANES
-        assert choose_lanes("auto", robot, make_policy(PolicyArgs(type="oracle"), robot, task), operator=False,
-                            fps=None) == 1  # fmt: skip
+        noisy = make_policy(PolicyArgs(noise_std=0.01), robot, task)
+        oracle = make_policy(PolicyArgs(type="oracle"), robot, task)
+        assert batches_lanes(learned) and batches_lanes(noisy) and not batches_lanes(oracle)
+        assert choose_lanes("auto", robot, learned, operator=False, fps=None) == AUTO_LANES == 1
     finally:
         robot.disconnect()
