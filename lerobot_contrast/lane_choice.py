@@ -9,10 +9,9 @@ from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
 
-# Lanes `--lanes=auto` runs with. One for now: on 2 shared cores 8 lanes of the learned default took the CPU time of
-# one (scripts/bench_lanes.py: 0.97x), since what a step costs there is per lane (frames to float, resizing,
-# rendering, JPEG for Rerun), not per call; and an episode a robot aborts cannot yet be replayed to the Rerun observer
-# from a lane. `--lanes=N` asks for N.
+# Lanes `--lanes=auto` runs with. One for now: an episode a robot aborts cannot yet be replayed from a lane to the
+# Rerun recorder (a plugin robot whose link drops crashed the run). `--lanes=N` asks for N: on 2 cores 8 lanes of the
+# learned default took 0.36 of one lane's CPU time, with identical journals (scripts/bench_lanes.py --lanes=8).
 AUTO_LANES = 1
 EVAL_THREADS = 1
 

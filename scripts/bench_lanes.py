@@ -79,7 +79,7 @@ def spin(stop: float) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--lanes", default="auto", help="lanes of the second run (default: the evaluation's auto)")
+    parser.add_argument("--lanes", default="8", help="lanes of the second run (default: 8)")
     parser.add_argument("--n_instances", type=int, default=None, help="default: the task's own (the default eval)")
     parser.add_argument("--busy", action="store_true", help="keep one core busy with another process meanwhile")
     parser.add_argument("--feature_sets", action="store_true", help="instead: compare runs under CPU feature sets")
