@@ -137,7 +137,8 @@ def open_dataset(root: Path, repo_id: str):
 def record_episodes(
     dataset, simulator: Simulator, instances: list[Instance], actor: Actor, max_steps: int
 ) -> list[Outcome]:
-    """One dataset episode per instance (an instance already achieved at its start records nothing)."""
+    """One dataset episode per instance (an instance already achieved at its start records nothing); any simulator
+    with `rollout(instance, actor, max_steps, record=...)`, the apartment's included."""
     outcomes = []
     for instance in instances:
         outcome = simulator.rollout(instance, actor, max_steps, record=dataset.add_frame)

@@ -153,13 +153,3 @@ def open_dataset(root: Path, repo_id: str):
     if (root / "meta" / "info.json").exists():
         return LeRobotDataset.resume(repo_id, root=root)
     return LeRobotDataset.create(repo_id, fps=FPS, features=dataset_features(), root=root, use_videos=False)
-
-
-def record_episodes(dataset, simulator: NavSimulator, instances: list[Instance], actor: Actor, max_steps: int):
-    outcomes = []
-    for instance in instances:
-        outcome = simulator.rollout(instance, actor, max_steps, record=dataset.add_frame)
-        if dataset.has_pending_frames():
-            dataset.save_episode()
-        outcomes.append(outcome)
-    return outcomes

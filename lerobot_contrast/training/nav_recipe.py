@@ -18,7 +18,8 @@ import numpy as np
 from lerobot_contrast.domains.vln.sampler import sample_arrangements
 from lerobot_contrast.domains.vln.task import SUCCESS_RADIUS_M
 from lerobot_contrast.record.third_party import third_party_output
-from lerobot_contrast.training.nav_episodes import NavSimulator, SlippingTeacher, open_dataset, record_episodes
+from lerobot_contrast.training.episodes import record_episodes
+from lerobot_contrast.training.nav_episodes import NavSimulator, SlippingTeacher, open_dataset
 from lerobot_contrast.training.nav_learner import NavLearner, NavMixture, closed_loop, select_action_ms
 from lerobot_contrast.training.recipe import Progress, _shipped_files, lerobot_train
 
