@@ -9,8 +9,9 @@ from __future__ import annotations
 import collections
 import threading
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import IO
+from typing import IO, Any
 
 from rich.console import Console
 from rich.table import Table
@@ -74,6 +75,7 @@ class Staging:
     action: str  # "ready" | "skip" | "stop"
     reset_s: float = 0.0
     moved: float | None = None  # the operator's own figure for the distance moved, when it differs from the plan
+    measured: Mapping[str, Any] | None = None  # what a calibrated camera measured of the staging (staging/check.py)
 
 
 @dataclass(frozen=True)
@@ -84,10 +86,13 @@ class Label:
 
 
 class OperatorConsole:
-    def __init__(self, answers: Answers, console: Console | None = None, unit: str = "m") -> None:
+    """`bench`: a calibrated camera that shows each target and checks the staging (staging.check.Bench)."""
+
+    def __init__(self, answers: Answers, console: Console | None = None, unit: str = "m", bench: Any = None) -> None:
         self.answers = answers
         self.console = console or Console(highlight=False)
         self.unit = unit
+        self.bench = bench
 
     def stage(self, context: TrialContext) -> Staging:
         """Show what to move for this trial and time the operator from the prompt to "ready"."""
@@ -130,6 +135,22 @@ class OperatorConsole:
         if not moves:
             self.console.print("nothing to move")
         self.console.print(f"planned cost: {context.planned_cost:.2f} {self.unit}")
+
+    def fix_or_accept(self, off: Mapping[str, float | None], tolerance: float) -> str:
+        """Say which checked objects the camera found off target; "fix" (measure again), "accept" or "stop"."""
+        table = Table("object", "measured", title=f"staging check (tolerance {tolerance * 100:g} cm)")
+        for name, distance in off.items():
+            said = "not seen" if distance is None else f"{distance * 100:.1f} cm off" if distance > 0 else "ok"
+            table.add_row(name, f"[red]{said}[/]" if said != "ok" else said)
+        self.console.print(table)
+        while True:
+            self.console.print(
+                "[bold]Enter[/] after fixing them to measure again · [bold]a[/] accept as placed · [bold]q[/] stop session"
+            )
+            answer = self.answers.next().lower()
+            if answer in ("", "a", "q"):
+                return {"": "fix", "a": "accept", "q": "stop"}[answer]
+            self.console.print(f"[red]not understood: {answer!r}[/]")
 
     def running(self) -> None:
         self.console.print("running · [bold]s[/] success · [bold]f[/] failure · [bold]e[/] EMERGENCY STOP (then Enter)")

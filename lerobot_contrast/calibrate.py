@@ -1,0 +1,144 @@
+"""`python -m lerobot_contrast.calibrate`: find the printed ArUco board lying on the table in each camera's view and
+store the table-to-pixel homography beside the task (<task>.calibration.json), for staging overlays and checks.
+
+`--write_board=board.pdf` writes the board to print (its printed size is stated on it and here).
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from lerobot.robots import RobotConfig
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.flags import (
+    ConfigError,
+    bool_flags,
+    check_names,
+    flag_types,
+    help_text,
+    join_values,
+    parse_config,
+    robot_type,
+    wants_help,
+)
+from lerobot_contrast.staging.board import BoardArgs, printed_size_text, write_page
+
+COMMAND = "python -m lerobot_contrast.calibrate"
+
+
+@dataclass
+class CalibrateConfig:
+    """Calibrate the table plane to each camera from the printed ArUco board lying on the table."""
+
+    # The task whose table this is: a shipped task file by name (so101_blocks) or a task file's path.
+    task: str = "so101_blocks"
+    # The robot whose cameras see the table, with eval's --robot.* flags (e.g. so101_follower and its cameras).
+    robot: RobotConfig | None = None
+    # Calibrate from a saved camera frame (PNG/JPEG) instead of a robot's cameras.
+    image: Path | None = None
+    # The camera the --image was taken with (its observation key in eval).
+    camera: str = "top"
+    # Where the board's centre lies on the table: --board.x=0.30 --board.y=0 (metres) --board.yaw_deg=0.
+    board: BoardArgs = field(default_factory=BoardArgs)
+    # The calibration file to write (default: beside the task file, <task>.calibration.json).
+    output: Path | None = None
+    # Refuse a fit whose RMS reprojection error is above this many pixels.
+    max_error_px: float = 2.0
+    # Write the printable board to this .pdf or .png and exit.
+    write_board: Path | None = None
+
+
+def frames(cfg: CalibrateConfig) -> dict[str, np.ndarray]:
+    """The RGB frames to calibrate: the --image, or one from each of the robot's cameras."""
+    if cfg.image is not None:
+        import cv2
+
+        image = cv2.imread(str(cfg.image), cv2.IMREAD_COLOR) if cfg.image.is_file() else None
+        if image is None:
+            raise UserError(f"--image={cfg.image}: cannot read it as an image; give a PNG or JPEG camera frame")
+        return {cfg.camera: cv2.cvtColor(image, cv2.COLOR_BGR2RGB)}
+    if cfg.robot is None:
+        raise ConfigError("give --robot.type=... (with its cameras) or --image=FRAME.png to calibrate from")
+    from lerobot.robots import make_robot_from_config
+
+    from lerobot_contrast.eval import connect
+
+    try:
+        robot = make_robot_from_config(cfg.robot)
+    except Exception as error:
+        raise ConfigError(
+            f"--robot.type={cfg.robot.type}: cannot build the robot ({' '.join(str(error).split())})"
+        ) from None
+    connect(robot)
+    try:
+        return camera_frames(robot)
+    finally:
+        robot.disconnect()
+
+
+def camera_frames(robot: Any) -> dict[str, np.ndarray]:
+    observation = robot.get_observation()
+    found = {k: np.asarray(v) for k, v in observation.items() if getattr(v, "ndim", 0) == 3 and v.shape[-1] == 3}
+    if not found:
+        raise UserError(f"--robot.type={robot.name}: the robot has no camera; add one with --robot.cameras=...")
+    return found
+
+
+def calibrate(cfg: CalibrateConfig, images: dict[str, np.ndarray]) -> Path:
+    """Fit each camera's homography, write the calibration file, and say how well each fits."""
+    from lerobot_contrast.staging.homography import CalibrationError, fit, save
+    from lerobot_contrast.staging.setup import default_calibration
+
+    output = cfg.output or default_calibration(cfg.task)
+    if output is None:
+        raise ConfigError(f"--task={cfg.task} is not a task file; name the calibration file with --output=PATH")
+    fitted, failed = [], []
+    for camera, image in images.items():
+        try:
+            fitted.append(fit(camera, image, cfg.board, cfg.max_error_px))
+        except CalibrationError as error:
+            failed.append(str(error))
+    if not fitted:
+        raise CalibrationError("; ".join(failed))
+    save(output, fitted, cfg.board)
+    for calibration in fitted:
+        print(
+            f"camera {calibration.camera}: {calibration.markers} markers, reprojection error {calibration.error_px:.2f} px"
+        )
+    for line in failed:
+        print(f"skipped: {line}")
+    print(f"wrote {output}")
+    return output
+
+
+def main(argv: list[str] | None = None) -> int:
+    from lerobot_contrast.build import check_robot_type, register_robots
+
+    try:
+        argv = join_values(list(sys.argv[1:] if argv is None else argv), bool_flags(CalibrateConfig))
+        if not wants_help(argv):
+            check_names(argv, flag_types(CalibrateConfig), robots=False)
+        if wants_help(argv) or any(arg.startswith("--robot.") for arg in argv):  # LeRobot's robots load slowly
+            check_robot_type(argv, register_robots())
+        if wants_help(argv):
+            print(help_text(CalibrateConfig, COMMAND, robot_type(argv)))
+            print(f"\nThe board: {printed_size_text()}.")
+            return 0
+        cfg = parse_config(CalibrateConfig, argv)
+        if cfg.write_board is not None:
+            print(write_page(cfg.write_board))
+            return 0
+        calibrate(cfg, frames(cfg))
+        return 0
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

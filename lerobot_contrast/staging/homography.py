@@ -1,0 +1,170 @@
+"""The table-to-camera homography: fitting it to the board's markers, its JSON file, and mapping between table
+metres and pixels, including points above the table (an object's centre) through the camera pose it implies.
+
+Pixels follow OpenCV: (col, row) with pixel centres at integers.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.staging import board
+
+CALIBRATION_VERSION = 1
+MIN_MARKERS = 4  # fewer leaves the fit unchecked (one marker's four corners fit any homography exactly)
+# Used where the homography cannot tell the focal length (a camera looking straight down): a typical webcam's.
+FALLBACK_FOCAL_FRACTION = 0.8
+
+
+class CalibrationError(UserError):
+    pass
+
+
+@dataclass(frozen=True)
+class CameraCalibration:
+    """One camera's view of the table plane."""
+
+    camera: str
+    image_size: tuple[int, int]  # width, height
+    homography: np.ndarray  # (3, 3): table (x, y, 1) in metres -> pixel (col, row, 1)
+    error_px: float  # RMS reprojection error of the marker corners
+    markers: int
+
+    def to_pixels(self, xy: np.ndarray) -> np.ndarray:
+        """Table points (N, 2) on the table's surface -> pixels (N, 2)."""
+        return cv2.perspectiveTransform(np.asarray(xy, np.float64).reshape(-1, 1, 2), self.homography).reshape(-1, 2)
+
+    def to_table(self, pixels: np.ndarray, height: float = 0.0) -> np.ndarray:
+        """Pixels (N, 2) -> table points (N, 2) where their rays cross the plane `height` metres above the table."""
+        pixels = np.asarray(pixels, np.float64).reshape(-1, 2)
+        if height == 0.0:
+            inverse = np.linalg.inv(self.homography)
+            return cv2.perspectiveTransform(pixels.reshape(-1, 1, 2), inverse).reshape(-1, 2)
+        centre, rays = self._rays(pixels)
+        scale = (height - centre[2]) / rays[:, 2]
+        return centre[:2] + scale[:, None] * rays[:, :2]
+
+    def lift(self, xy: np.ndarray, height: float) -> np.ndarray:
+        """Table points (N, 2) raised `height` metres -> pixels (N, 2)."""
+        intrinsics, rotation, translation = self.pose()
+        points = np.column_stack([np.asarray(xy, np.float64).reshape(-1, 2), np.full(len(xy), height)])
+        camera = points @ rotation.T + translation
+        projected = camera @ intrinsics.T
+        return projected[:, :2] / projected[:, 2:]
+
+    def pose(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Intrinsics, rotation and translation (table -> camera) implied by the homography, for square pixels
+        centred on the image."""
+        width, height = self.image_size
+        focal = _focal(self.homography, (width - 1) / 2, (height - 1) / 2) or FALLBACK_FOCAL_FRACTION * width
+        intrinsics = np.array([[focal, 0, (width - 1) / 2], [0, focal, (height - 1) / 2], [0, 0, 1]])
+        columns = np.linalg.inv(intrinsics) @ self.homography
+        scale = 1.0 / np.linalg.norm(columns[:, 0])
+        if columns[2, 2] * scale < 0:  # the table lies in front of the camera
+            scale = -scale
+        r1, r2, translation = (columns * scale).T
+        u, _, vt = np.linalg.svd(np.column_stack([r1, r2, np.cross(r1, r2)]))
+        return intrinsics, u @ vt, translation
+
+    def _rays(self, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        intrinsics, rotation, translation = self.pose()
+        centre = -rotation.T @ translation
+        homogeneous = np.column_stack([pixels, np.ones(len(pixels))])
+        return centre, homogeneous @ np.linalg.inv(intrinsics).T @ rotation
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "camera": self.camera,
+            "image_size": list(self.image_size),
+            "homography": self.homography.tolist(),
+            "error_px": round(self.error_px, 4),
+            "markers": self.markers,
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> CameraCalibration:
+        return cls(
+            data["camera"], tuple(data["image_size"]), np.array(data["homography"], float), data["error_px"],
+            data["markers"],
+        )  # fmt: skip
+
+
+def _focal(homography: np.ndarray, cx: float, cy: float) -> float | None:
+    """The focal length (pixels) that makes the homography's two table axes orthogonal and of equal length
+    (Zhang's constraints, least squares); None where the view cannot tell it (looking straight down)."""
+    h = np.array([[1, 0, -cx], [0, 1, -cy], [0, 0, 1]]) @ homography
+    a = np.array([h[0, 0] * h[0, 1] + h[1, 0] * h[1, 1], h[0, 0] ** 2 + h[1, 0] ** 2 - h[0, 1] ** 2 - h[1, 1] ** 2])
+    b = np.array([h[2, 0] * h[2, 1], h[2, 0] ** 2 - h[2, 1] ** 2])
+    inverse_square = -(a @ b) / (a @ a)
+    if not math.isfinite(inverse_square) or inverse_square <= 0 or abs(a @ b) < 1e-12 * np.linalg.norm(a) ** 2:
+        return None
+    return 1.0 / math.sqrt(inverse_square)
+
+
+def detect_board(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """Board-frame points (N, 2) and their pixels (N, 2) for every marker corner found, and how many markers."""
+    grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+    parameters = cv2.aruco.DetectorParameters()
+    parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_APRILTAG
+    corners, ids, _ = cv2.aruco.ArucoDetector(board.dictionary(), parameters).detectMarkers(grey)
+    if ids is None or len(ids) == 0:
+        return np.empty((0, 2)), np.empty((0, 2)), 0
+    objects, pixels = board.grid_board().matchImagePoints(corners, ids)
+    return objects.reshape(-1, 3)[:, :2], pixels.reshape(-1, 2).astype(np.float64), len(ids)
+
+
+def fit(camera: str, image: np.ndarray, where: board.BoardArgs, max_error_px: float) -> CameraCalibration:
+    """The homography from the board found in `image`, lying on the table as `where` says; one-line errors
+    when the board is not found or the fit is worse than `max_error_px`."""
+    objects, pixels, markers = detect_board(image)
+    if markers < MIN_MARKERS:
+        seen = "no marker" if markers == 0 else f"only {markers} of {board.COLUMNS * board.ROWS} markers"
+        raise CalibrationError(
+            f"camera {camera}: board not found ({seen} of the printed ArUco board in view); lay the whole board flat "
+            "in the camera's view, well lit, and try again"
+        )
+    table = board.board_to_table(objects, where)
+    homography, _ = cv2.findHomography(table, pixels, 0)
+    calibration = CameraCalibration(camera, (image.shape[1], image.shape[0]), homography, 0.0, markers)
+    error = float(np.sqrt(np.mean(np.sum((calibration.to_pixels(table) - pixels) ** 2, axis=1))))
+    if error > max_error_px:
+        raise CalibrationError(
+            f"camera {camera}: reprojection error {error:.2f} px is above --max_error_px={max_error_px:g}; the board "
+            "is not flat, or is printed scaled (print at 100%), or the camera moved: flatten it and try again"
+        )
+    return CameraCalibration(camera, calibration.image_size, homography, error, markers)
+
+
+def save(path: Path, calibrations: list[CameraCalibration], where: board.BoardArgs) -> None:
+    data = {
+        "version": CALIBRATION_VERSION,
+        "board": {"x": where.x, "y": where.y, "yaw_deg": where.yaw_deg, "printed": board.printed_size_text()},
+        "cameras": {c.camera: c.to_json() for c in calibrations},
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_suffix(".tmp")
+    temporary.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+    temporary.replace(path)
+
+
+def load(path: Path) -> dict[str, CameraCalibration]:
+    """The calibrated cameras in `path`; a missing or damaged file is one line saying how to make it."""
+    redo = "run python -m lerobot_contrast.calibrate with the task's --task and your --robot flags"
+    if not path.is_file():
+        raise CalibrationError(f"{path}: no table calibration; {redo}")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if data.get("version") != CALIBRATION_VERSION:
+            raise CalibrationError(f"{path}: calibration version {data.get('version')!r}, expected "
+                                   f"{CALIBRATION_VERSION}; {redo}")  # fmt: skip
+        return {name: CameraCalibration.from_json(item) for name, item in data["cameras"].items()}
+    except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+        raise CalibrationError(f"{path}: not a table calibration file; {redo}") from None

@@ -1,0 +1,85 @@
+"""Find coloured objects in a camera frame and place them on the table through the calibration.
+
+Each colour is a hue band (OpenCV HSV, hue 0-179) of saturated, lit pixels inside the workspace; an object is the
+largest such blob, placed where the ray through its centroid meets the plane halfway up the object.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import cv2
+import numpy as np
+
+from lerobot_contrast.staging.homography import CameraCalibration
+
+HUES = {
+    "red": ((0, 8), (170, 180)),
+    "orange": ((9, 19),),
+    "yellow": ((20, 35),),
+    "green": ((36, 85),),
+    "blue": ((95, 130),),
+    "purple": ((131, 160),),
+}
+MIN_SATURATION, MIN_VALUE = 80, 60
+MIN_PIXELS = 12  # smaller blobs are noise, or an object mostly hidden (by the arm): better not found than wrong
+# A blob counts as the object when its area is within these multiples of the object's footprint seen from the camera
+# (its top and sides show too); anything else is clutter of the same colour, or the object mostly hidden.
+AREA_RANGE = (0.25, 6.0)
+
+
+def workspace_mask(
+    calibration: CameraCalibration, bounds: tuple[tuple[float, float], tuple[float, float]]
+) -> np.ndarray:
+    """Pixels whose table point lies inside `bounds` ((x_min, y_min), (x_max, y_max)), as a uint8 mask."""
+    (x0, y0), (x1, y1) = bounds
+    corners = calibration.to_pixels(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+    width, height = calibration.image_size
+    mask = np.zeros((height, width), np.uint8)
+    cv2.fillPoly(mask, [np.round(corners).astype(np.int32)], 255)
+    return mask
+
+
+def colour_mask(image: np.ndarray, colour: str) -> np.ndarray:
+    hsv = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)
+    mask = np.zeros(image.shape[:2], np.uint8)
+    for low, high in HUES[colour]:
+        mask |= cv2.inRange(hsv, (low, MIN_SATURATION, MIN_VALUE), (min(high, 179), 255, 255))
+    return mask
+
+
+def find_objects(
+    image: np.ndarray,
+    calibration: CameraCalibration,
+    colours: Mapping[str, str],
+    bounds: tuple[tuple[float, float], tuple[float, float]],
+    height: float,
+) -> dict[str, tuple[float, float]]:
+    """Table (x, y) of each object in `colours` ({name: colour}) seen in the RGB `image`; unseen ones are left out."""
+    inside = workspace_mask(calibration, bounds)
+    found: dict[str, tuple[float, float]] = {}
+    for name, colour in colours.items():
+        mask = colour_mask(image, colour) & inside
+        count, _, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        if count < 2:
+            continue
+        best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+        area = stats[best, cv2.CC_STAT_AREA]
+        x, y = calibration.to_table(centroids[best][None, :], height / 2)[0]
+        expected = _footprint_pixels(calibration, x, y, height)
+        if area >= MIN_PIXELS and AREA_RANGE[0] * expected <= area <= AREA_RANGE[1] * expected:
+            found[name] = (float(x), float(y))
+    return found
+
+
+def _footprint_pixels(calibration: CameraCalibration, x: float, y: float, size: float) -> float:
+    """Pixel area of a square of side `size` lying on the table at (x, y)."""
+    half = size / 2
+    square = np.array([[x - half, y - half], [x + half, y - half], [x + half, y + half], [x - half, y + half]])
+    return float(cv2.contourArea(calibration.to_pixels(square).astype(np.float32)))
+
+
+def known_colour(value: str | None) -> str | None:
+    """The hue band a task's colour word names (colour or color, any case), None where there is none."""
+    word = (value or "").strip().lower()
+    return word if word in HUES else None
