@@ -2,15 +2,32 @@
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import draccus
-from lerobot.robots import RobotConfig
 
 from lerobot_contrast.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.policies.base import PolicyArgs
+
+
+class _LazyModule:
+    """A module imported when an attribute is first read. LeRobot's robots load torch (seconds): draccus reads the
+    robot field's type only when it parses, so flag names are checked before that (eval's main)."""
+
+    def __init__(self, name: str) -> None:
+        self._name = name
+
+    def __getattr__(self, attribute: str) -> Any:
+        return getattr(importlib.import_module(self._name), attribute)
+
+
+if TYPE_CHECKING:
+    from lerobot import robots
+else:
+    robots = _LazyModule("lerobot.robots")
 
 
 @dataclass
@@ -65,7 +82,7 @@ class EvalConfig:
     policy: PolicyArgs = field(default_factory=PolicyArgs)
     # The robot: any LeRobot robot type, plugins included (e.g. so101_follower, lekiwi_client, locobot), or
     # by default the task's simulator: language_table_sim (--task=language_table) or vln_sim (--task=vln).
-    robot: RobotConfig | None = None
+    robot: robots.RobotConfig | None = None
     # Control rate in Hz; default: 10 on hardware, as fast as possible on a simulated robot.
     fps: float | None = None
     # Who stages scenes and judges outcomes: console (an operator, prompted between trials) or auto (the robot

@@ -28,11 +28,10 @@ from lerobot_contrast.contrast.stopping import StopRule, summary_line
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.domains import load_task
-from lerobot_contrast.evaluation import Evaluation, check_budget, preview, run
 from lerobot_contrast.flags import (
     bool_flags,
     check_names,
-    flag_types,
+    flag_names,
     help_text,
     join_values,
     parse_config,
@@ -46,10 +45,11 @@ from lerobot_contrast.progress import RunProgress, header_lines
 from lerobot_contrast.record.compare_run import compare_rule
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
-from lerobot_contrast.runner import RobotLostError
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
+
+    from lerobot_contrast.evaluation import Evaluation
 
 
 # Base instances times repeats one run may plan: beyond this, planning alone takes minutes and gigabytes.
@@ -144,6 +144,8 @@ def default_output_dir(cfg: EvalConfig, task: Task) -> Path:
 
 
 def dry_run(evaluation: Evaluation) -> None:
+    from lerobot_contrast.evaluation import preview
+
     records, unit = preview(evaluation), evaluation.cost_model.unit
     print("\n".join(plan_lines(records, evaluation.task.storage_scene(), evaluation.cost_model)))
     done = [r for r in records if r.status == "done"]
@@ -181,6 +183,9 @@ def connect(robot: Robot) -> None:
 
 def planned_evaluation(cfg: EvalConfig) -> Evaluation:
     """The checked plan as an Evaluation with no robot, policy or run directory attached yet."""
+    # The spine loads its runner, which loads LeRobot and torch: only once the flags are known to be sound.
+    from lerobot_contrast.evaluation import Evaluation, check_budget
+
     source = adopt_plan(cfg) if cfg.plan else None
     validate(cfg)
     task, plan = build_plan(cfg)
@@ -257,6 +262,9 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
 
 
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
+    from lerobot_contrast.evaluation import run
+    from lerobot_contrast.runner import RobotLostError
+
     path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
     resume = f"--output_dir={path} --resume=true"
     print("\n".join(header_lines(evaluation.settings, path, f"python -m lerobot_contrast.eval {resume}")), flush=True)
@@ -301,8 +309,8 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
 def main(argv: list[str] | None = None) -> int:
     try:
         argv = join_values(list(sys.argv[1:] if argv is None else argv), bool_flags(EvalConfig))
-        if not wants_help(argv):  # a mistyped flag is named before LeRobot's robots and plugins load
-            check_names(argv, flag_types(EvalConfig), robots=False)
+        if not wants_help(argv):  # a mistyped flag is named before LeRobot, torch and the robot plugins load
+            check_names(argv, flag_names(EvalConfig), robots=False)
         check_robot_type(argv, register_robots())
         if wants_help(argv):
             print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv)))

@@ -40,9 +40,22 @@ def flag_types(cls: type, prefix: str = "") -> dict[str, Any]:
     return types
 
 
+def flag_names(cls: type, prefix: str = "") -> dict[str, bool]:
+    """Every flag of `cls` and whether it takes true or false, read without resolving the fields' types (the robot
+    field's would load LeRobot and torch), so that a mistyped name is answered at once."""
+    names: dict[str, bool] = {}
+    for f in dataclasses.fields(cls):
+        default = _default(f)
+        if dataclasses.is_dataclass(default):
+            names |= flag_names(type(default), prefix + f.name + ".")
+        else:
+            names[prefix + f.name] = f.type in (bool, "bool")
+    return names
+
+
 def bool_flags(cls: type) -> set[str]:
     """The flags of `cls` that take true or false (alone, they mean true)."""
-    return {name for name, tp in flag_types(cls).items() if tp is bool}
+    return {name for name, boolean in flag_names(cls).items() if boolean}
 
 
 def _default(f: dataclasses.Field) -> Any:
@@ -134,11 +147,12 @@ def check_names(argv: list[str], types: dict[str, Any], robots: bool = True) -> 
         if not arg.startswith("-"):
             raise ConfigError(f"unexpected argument {arg!r}; flags look like --name=value (see --help)")
         name = arg.lstrip("-").split("=", 1)[0]
+        chosen = robot or robot_type(argv) is not None or name == "robot.type"
+        if name.startswith("robot.") and "robot" in types and not chosen:
+            raise ConfigError(f"--{name} needs --robot.type=TYPE, the robot whose setting it is")
         if name.startswith("robot.") and "robot" in types and not robots:
             continue
         if name.startswith("robot.") and "robot" in types and name not in robot:
-            if not robot:
-                raise ConfigError(f"--{name} needs --robot.type=TYPE, the robot whose setting it is")
             raise _unknown(name, robot | {k for k in known if not k.startswith("robot")})
         if name not in known | robot:
             raise _unknown(name, known)

@@ -1,10 +1,13 @@
-"""Seconds from starting a command to its one-line error for a mistyped flag, for every command (goal: under 2 s).
+"""Seconds from starting a command to its one-line error for a mistyped flag, for every command (goal: under 2 s on
+an idle machine). Beside them, in the same run: a bare interpreter's start and the import of LeRobot's robots (torch),
+which the check must not wait for, so `*_vs_lerobot` stays comparable across loads; the load average is printed too.
 
 Usage: .venv/bin/python scripts/bench_flag_errors.py [--repeats N]; the last line holds the figures as name=value."""
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import sys
@@ -31,15 +34,30 @@ def seconds_to_error(command: str, argv: list[str], expected: str) -> float:
     return elapsed
 
 
+def seconds_to_run(code: str) -> float:
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
+    return time.perf_counter() - start
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeats", type=int, default=3)
     repeats = parser.parse_args().repeats
-    figures = {}
+    load_before = os.getloadavg()[0]
+    figures = {
+        "python_s": statistics.median(seconds_to_run("pass") for _ in range(repeats)),
+        "lerobot_robots_s": statistics.median(seconds_to_run("import lerobot.robots") for _ in range(repeats)),
+    }
     for command, (argv, expected) in TYPOS.items():
         times = [seconds_to_error(command, argv, expected) for _ in range(repeats)]
         figures[f"{command}_s"] = statistics.median(times)
         print(f"{command}: median {figures[f'{command}_s']:.2f} s over {repeats} runs", flush=True)
+    slowest = max(figures[f"{command}_s"] for command in TYPOS)
+    figures["slowest_s"] = slowest
+    figures["slowest_vs_lerobot"] = slowest / figures["lerobot_robots_s"]
+    figures["load_1min"] = (load_before + os.getloadavg()[0]) / 2
+    print(f"bare python {figures['python_s']:.2f} s, import lerobot.robots {figures['lerobot_robots_s']:.2f} s")
     print(" ".join(f"{name}={value:.2f}" for name, value in figures.items()))
 
 

@@ -116,3 +116,29 @@ def test_an_unknown_robot_or_policy_field_names_the_valid_ones_in_one_line(capsy
         assert main([*argv, "--dry_run=true"]) == 2
         err = capsys.readouterr().err
         assert err.startswith(f"error: {message}") and err.count("\n") == 1, err
+
+
+# Runs a command in a fresh interpreter and says which heavy libraries its answer waited for.
+LOADED = """import runpy, sys
+sys.argv = [sys.argv[1], *sys.argv[2:]]
+try:
+    runpy.run_module(sys.argv[0], run_name="__main__")
+except SystemExit as exit:
+    print(exit.code, *sorted(m for m in ("torch", "scipy", "ray", "pandas", "lerobot.robots") if m in sys.modules))
+"""
+
+
+def test_a_mistyped_flag_is_answered_before_lerobot_torch_or_ray_load():
+    """The check that makes a typo's answer instant (the seconds are measured by scripts/bench_flag_errors.py)."""
+    import subprocess
+    import sys
+
+    cases = [
+        ("lerobot_contrast.eval", ["--n_instance=3"], "--n_instances"),
+        ("lerobot_contrast.eval", ["--robot.port=x"], "--robot.type=TYPE"),
+        ("lerobot_contrast.sweep", ["sweep.yaml", "--max_retrie=2"], "--max_retries"),
+    ]
+    for module, argv, named in cases:
+        run = subprocess.run([sys.executable, "-c", LOADED, module, *argv], capture_output=True, text=True)
+        assert named in run.stderr and run.stderr.count("\n") == 1, run.stderr
+        assert run.stdout.split() == ["2"], f"{module} {argv}: exit code, then what loaded first: {run.stdout}"

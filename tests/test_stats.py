@@ -64,9 +64,24 @@ def test_the_fixed_n_interval_is_clopper_pearson_for_independent_trials_and_wide
     spread = stats.estimate(values, np.arange(8))
     assert clustered.n_clusters == 4 and clustered.high - clustered.low > spread.high - spread.low
     all_pass = stats.estimate(np.ones(12), np.repeat(np.arange(4), 3))
-    # every outcome equal: each base counts once, n* = 4 (t_11 / t_3)^2, and Clopper-Pearson's low is 0.025^(1/n*)
-    effective = 4 * (stats.t_quantile(11) / stats.t_quantile(3)) ** 2
-    assert all_pass.high == 1.0 and all_pass.low == pytest.approx(0.025 ** (1 / effective))
+    # every outcome equal: each base counts once, n* = 4, and Clopper-Pearson's low is 0.025^(1/4)
+    assert all_pass.high == 1.0 and all_pass.low == pytest.approx(0.025 ** (1 / 4))
+
+
+def test_all_successes_over_few_bases_count_each_base_once():
+    """5 of 5 over 3 bases read [0.052, 1.000] when the degrees-of-freedom factor also shrank n* = 3 to 1.25."""
+    five = stats.estimate(np.ones(5), np.array([0, 0, 1, 1, 2]))
+    assert (round(five.low, 3), five.high) == (0.292, 1.0)
+    none = stats.estimate(np.zeros(5), np.array([0, 0, 1, 1, 2]))
+    assert (none.low, round(none.high, 3)) == (0.0, 0.708)
+    # Bases whose trials share one outcome are the worst case: the interval still covers 95% of studies.
+    rng, covered = np.random.default_rng(3), 0
+    for _ in range(STUDIES):
+        sizes = rng.integers(1, 6, size=3)
+        outcomes = np.repeat(rng.random(3) < 0.4, sizes).astype(float)
+        e = stats.estimate(outcomes, np.repeat(np.arange(3), sizes))
+        covered += e.low <= 0.4 <= e.high
+    assert covered / STUDIES >= 0.95, covered / STUDIES
 
 
 @pytest.mark.parametrize("n_bases", [10, 30, 100])

@@ -16,14 +16,14 @@ import yaml
 
 from lerobot_contrast.build import TASK_ROBOTS, choose_robot, register_robots
 from lerobot_contrast.config import ConfigError, EvalConfig
-from lerobot_contrast.flags import flag_types
+from lerobot_contrast.flags import flag_names, flag_types
 
 FILE_KEYS = ("output_dir", "eval", "grid", "cells")
 # Settings the sweep decides for every cell: where it is written, whether it resumes, who stages its scenes.
 SET_BY_SWEEP = ("output_dir", "resume", "dry_run", "operator", "push_to_hub", "repo_id", "private")
 # Settings written as nested mappings (policy: {type: oracle}) or dotted keys (policy.type: oracle): the robot
 # and every group of flags (policy, stop, ...).
-NESTED = ("robot", *sorted({name.split(".")[0] for name in flag_types(EvalConfig) if "." in name}))
+NESTED = ("robot", *sorted({name.split(".")[0] for name in flag_names(EvalConfig) if "." in name}))
 SIMULATORS = tuple(sorted(set(TASK_ROBOTS.values())))
 MAX_NAME = 150
 

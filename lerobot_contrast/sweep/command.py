@@ -4,9 +4,8 @@ tasks, on this machine or a cluster, each into its own run directory under one s
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
@@ -15,35 +14,18 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.eval import planned_evaluation
 from lerobot_contrast.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.record.sweep_dir import is_complete, is_sweep_dir, write_index, write_sweep_results
 from lerobot_contrast.sweep.cells import Cell, read_sweep_file, sweep_cells
-from lerobot_contrast.sweep.ray_pool import RayArgs, run_cells, start_ray
-from lerobot_contrast.sweep.worker import CellOutcome
+from lerobot_contrast.sweep.settings import SweepConfig as SweepConfig  # where the scripts import it
+
+if TYPE_CHECKING:
+    from lerobot_contrast.sweep.worker import CellOutcome
 
 COMMAND = "python -m lerobot_contrast.sweep SWEEP.yaml"
 
 
-@dataclass
-class SweepConfig:
-    """Run a sweep of contrast-set evaluations on Ray: every cell a simulated evaluation in its own run directory."""
-
-    # The sweep file (YAML, also given as the first argument): `eval` (settings every cell shares), `grid` (lists
-    # of values; every combination is a cell), `cells` (a list of settings to override, each with an optional
-    # `name` standing for them in the cell's directory name), and optionally `output_dir`.
-    sweep: Path | None = None
-    # The sweep folder, which holds one run directory per cell (default: the sweep file's output_dir, else
-    # outputs/sweeps/<sweep file name>). On a cluster it must be storage every node mounts at the same path.
-    output_dir: Path | None = None
-    # Continue the sweep in the sweep folder: skip complete cells and resume the others from their journals.
-    resume: bool = False
-    # Times Ray reruns a cell whose worker process dies; each attempt resumes from the cell's journal.
-    max_retries: int = 3
-    # List the cells and their planned trials, then exit without running anything.
-    dry_run: bool = False
-    ray: RayArgs = field(default_factory=RayArgs)
-
-
 def sweep_folder(cfg: SweepConfig, spec: dict) -> Path:
+    from lerobot_contrast.record.sweep_dir import is_sweep_dir  # pandas: after the flags are checked
+
     given = cfg.output_dir or spec.get("output_dir")
     folder = Path(given) if given else Path("outputs/sweeps") / cfg.sweep.stem
     if folder.exists() and any(folder.iterdir()) and not cfg.resume and not cfg.dry_run:
@@ -93,6 +75,10 @@ def run_sweep(cfg: SweepConfig, console: Console) -> int:
 def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[str, CellOutcome]:
     """Run the cells of `spec` (a sweep file's contents, read from cfg.sweep) that are not complete yet, then
     write the sweep index and results table; every cell's outcome by name (none with --dry_run)."""
+    # Ray, pandas, LeRobot and torch load here, once the flags are known to be sound.
+    from lerobot_contrast.record.sweep_dir import is_complete, write_index, write_sweep_results
+    from lerobot_contrast.sweep.ray_pool import run_cells, start_ray
+
     folder = sweep_folder(cfg, spec)
     cells = sweep_cells(cfg.sweep, spec, folder)
     planned = plan_cells(cells)
@@ -124,6 +110,8 @@ def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[st
 
 
 def _finished(cell: Cell) -> CellOutcome:
+    from lerobot_contrast.sweep.worker import CellOutcome
+
     return CellOutcome(cell.name, "complete", len(read_journal(Path(cell.config.output_dir) / "journal.jsonl")))
 
 

@@ -6,7 +6,6 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import ray
@@ -14,21 +13,13 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from lerobot_contrast.sweep.cells import Cell
+from lerobot_contrast.sweep.settings import RayArgs
 from lerobot_contrast.sweep.worker import CellOutcome, run_cell, wants_gpu
 
 POLL_S = 0.5
 # Each cell runs on one thread: the cells are the parallelism. Set when the worker process starts, before its
 # numerical libraries read them (Ray would otherwise pass on the driver's OMP_NUM_THREADS).
 ONE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
-
-
-@dataclass
-class RayArgs:
-    # The Ray cluster to join: auto (the one `ray start --head` runs on this machine) or ray://HOST:10001 (a
-    # remote head's client port). Default: start a Ray for this sweep on this machine only.
-    address: str | None = None
-    # CPUs of the Ray started on this machine, which is how many cells run at once (default: all its cores).
-    num_cpus: int | None = None
 
 
 def trials_recorded(cells: Sequence[Cell], finished: dict[str, int]) -> int:
