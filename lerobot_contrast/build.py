@@ -19,7 +19,12 @@ if TYPE_CHECKING:
     from lerobot.robots import Robot
 
 # The robot each task runs on when no --robot is given: an in-process simulator.
-TASK_ROBOTS = {"language_table": "language_table_sim", "vln": "vln_sim", "vln_paper": "vln_sim"}
+TASK_ROBOTS = {
+    "language_table": "language_table_sim",
+    "vln": "vln_sim",
+    "vln_paper": "vln_sim",
+    **dict.fromkeys(("libero_spatial", "libero_object", "libero_goal", "libero_10"), "libero_sim"),
+}
 OPERATORS = ("auto", "console")
 DEFAULT_HARDWARE_FPS = 10.0
 
@@ -30,6 +35,7 @@ def register_robots() -> dict[str, str]:
     from lerobot.utils.import_utils import register_third_party_plugins
 
     import lerobot_contrast.domains.language_table.config_language_table_sim  # noqa: F401
+    import lerobot_contrast.domains.libero.config_libero_sim  # noqa: F401
     import lerobot_contrast.domains.vln.config_vln_sim  # noqa: F401
 
     unavailable = {}
@@ -113,7 +119,15 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
             f"--operator=auto needs a robot that reports and stages this task's scene; {robot.name} cannot, "
             "so use --operator=console"
         )
-    return OperatorConsole(Answers(sys.stdin), unit=unit) if mode == "console" else None
+    if mode != "console":
+        if cfg.cost == "measured":
+            raise ConfigError("--cost=measured needs --operator=console: it is what a camera measured of the staging")
+        return None
+    from lerobot_contrast.staging.setup import make_bench
+
+    # The run directory is chosen after the console is built; the bench reads it when it first keeps a measurement.
+    bench = make_bench(cfg.staging, cfg.task, task, robot, cfg.cost, lambda: cfg.output_dir)
+    return OperatorConsole(Answers(sys.stdin), unit=unit, bench=bench)
 
 
 def run_fps(cfg: EvalConfig, robot: Robot) -> float | None:
