@@ -39,8 +39,10 @@ class StopArgs:
     # Stop once this run's paired difference from a finished run of the same plan is decided:
     # a run directory or hub:USER/NAME (run with its --plan).
     compare: str | None = None
-    # 1 - confidence of the anytime-valid intervals and of the comparison.
+    # 1 - confidence of the anytime-valid intervals and of the comparison (with --policies: family-wise, over pairs).
     alpha: float = 0.05
+    # With --policies: end the session once every pair of policies is decided.
+    decided: bool = False
 
 
 @dataclass
@@ -80,6 +82,11 @@ class EvalConfig:
     max_episode_s: float | None = None
     # The policy under evaluation.
     policy: PolicyArgs = field(default_factory=PolicyArgs)
+    # Compare policies interleaved, each trial run by every one in turn from the same staged scene (docs: ab.md):
+    # A,B[,C], each a policy type, directory or repo id, with its own options, e.g. tabletop_pointer:noise_std=0.02.
+    policies: str | None = None
+    # With --policies: the operator's console names the running policy only once its trial is labelled.
+    blind: bool = False
     # The robot: any LeRobot robot type, plugins included (e.g. so101_follower, lekiwi_client, locobot), or
     # by default the task's simulator: language_table_sim (--task=language_table) or vln_sim (--task=vln).
     robot: robots.RobotConfig | None = None
@@ -134,5 +141,13 @@ def resume_args(argv: list[str]) -> list[str]:
 SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes")
 
 
+# Settings of interleaved runs (--policies), left out of a single-policy run's config.json while at their default.
+PAIRING_DEFAULTS = {"policies": None, "blind": False}
+
+
 def config_json(config: Any) -> dict[str, Any]:
-    return {k: v for k, v in draccus.encode(config).items() if k not in SESSION_CHOICES}
+    encoded = draccus.encode(config)
+    out = {k: v for k, v in encoded.items() if k not in SESSION_CHOICES and PAIRING_DEFAULTS.get(k, ...) != v}
+    if isinstance(out.get("stop"), dict) and not out["stop"].get("decided"):
+        out["stop"] = {k: v for k, v in out["stop"].items() if k != "decided"}
+    return out

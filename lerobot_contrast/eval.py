@@ -240,6 +240,10 @@ def equipped(
 def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
     """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code.
     `chosen_robot`: the --robot.type as given, for messages."""
+    if cfg.policies is not None:
+        from lerobot_contrast.pairing.command import run_policies
+
+        return run_policies(cfg, chosen_robot)
     planned = planned_evaluation(cfg)
     task = planned.task
     if cfg.dry_run:

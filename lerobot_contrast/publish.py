@@ -46,8 +46,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     try:
         args = parse_args(argv)
+        from lerobot_contrast.pairing.pair_dir import is_pair_dir
         from lerobot_contrast.record.hub import publish_run  # after the flags: a typo is answered at once
 
+        if is_pair_dir(args.run_dir):  # an interleaved run: one repo per policy (pairing/publish.py)
+            from lerobot_contrast.pairing.publish import publish_pair
+
+            urls = publish_pair(args.run_dir, args.repo_id, private=args.private, commit_message=args.message)
+            print("\n".join(f"published {args.run_dir} ({url.split('/datasets/')[-1]})" for url in urls))
+            return 0
         url = publish_run(args.run_dir, args.repo_id, private=args.private, commit_message=args.message)
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)

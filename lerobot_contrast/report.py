@@ -71,17 +71,20 @@ def main(argv: list[str] | None = None) -> int:
 
 def report(args: ReportConfig) -> Path:
     """Write the report of the runs `args` names; returns the path of report.md."""
+    from lerobot_contrast.pairing.comparison import append_comparisons
+    from lerobot_contrast.pairing.pair_dir import expand, is_pair_dir
     from lerobot_contrast.reporting import build_report, load_run
     from lerobot_contrast.reporting.runs import distinct_runs, run_specs
 
-    specs = run_specs(args.runs)
+    pairs = [Path(spec) for spec in args.runs if is_pair_dir(Path(spec))]  # interleaved runs: one run per policy
+    specs = run_specs(expand(args.runs))
     given = [load_run(spec) for spec in specs]
-    output_dir = args.output_dir or default_output_dir(args.runs, given)
+    output_dir = args.output_dir or (pairs[0] / "report" if pairs else default_output_dir(args.runs, given))
     runs, repeats = distinct_runs(specs, given)
     for line in repeats:
         print(f"note: {line}")
     try:
-        return build_report(runs, output_dir, args.metric).path
+        return append_comparisons(build_report(runs, output_dir, args.metric).path, pairs)
     except OSError as error:
         raise ReportArgsError(
             f"--output_dir: cannot write to {output_dir} ({error.strerror}); choose a writable directory"

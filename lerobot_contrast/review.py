@@ -35,6 +35,10 @@ class ReviewError(UserError):
 
 def load_records(run_dir: Path) -> list[TrialRecord]:
     """The journal's records, read without touching the file: the run may still be writing it."""
+    from lerobot_contrast.pairing.pair_dir import is_pair_dir, pair_records
+
+    if is_pair_dir(run_dir):  # an interleaved run: every policy's episodes, side by side per base
+        return pair_records(run_dir)
     if not (run_dir / "journal.jsonl").is_file():
         raise ReviewError(f"{run_dir}: no journal.jsonl; pass a run directory written by lerobot_contrast.eval")
     return read_journal(run_dir / "journal.jsonl")
@@ -88,12 +92,17 @@ def select(
 
 def episode_title(record: TrialRecord) -> str:
     verdict = "✓" if record.success else "✗"
-    return f"{perturbation_label(record.perturbation)} · trial {record.index + 1} {verdict}"
+    policy = record.extra.get("pairing", {}).get("policy")  # set in an interleaved run (--policies)
+    return f"{perturbation_label(record.perturbation)} · trial {record.index + 1} {verdict}" + (
+        f" · {policy}" if policy else ""
+    )
 
 
 def entity_prefix(record: TrialRecord) -> str:
     name = re.sub(r"[^A-Za-z0-9_-]+", "_", record.perturbation or ORIGINAL)
-    return f"/episodes/trial_{record.index:06d}_{name}"
+    policy = record.extra.get("pairing", {}).get("policy")
+    suffix = "" if policy is None else "_" + re.sub(r"[^A-Za-z0-9_-]+", "_", policy)
+    return f"/episodes/trial_{record.index:06d}_{name}{suffix}"
 
 
 def _remap(path: str, prefix: str) -> str | None:
