@@ -11,6 +11,7 @@ import draccus
 
 from lerobot_contrast.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.policies.base import PolicyArgs
+from lerobot_contrast.staging.args import StagingArgs
 
 
 class _LazyModule:
@@ -72,7 +73,8 @@ class EvalConfig:
     # Experimenter-cost budget K in the cost model's unit; the run stops once the cumulative cost exceeds
     # it (default: no limit).
     budget: float | None = None
-    # Cost model: distance (metres objects are moved) or reset_time (modelled seconds of restaging).
+    # Cost model: distance (metres objects are moved), reset_time (modelled seconds of restaging), or measured
+    # (metres moved as a calibrated camera measured them; planned like distance).
     cost: str = "distance"
     # Seed of every random choice: the same seed gives the same plan and, in simulation, the same results.
     seed: int = 0
@@ -126,6 +128,9 @@ class EvalConfig:
     lanes: str = "auto"
     # Stopping rules: --stop.width=0.1, --stop.compare=RUN_DIR|hub:USER/NAME, --stop.alpha=0.05.
     stop: StopArgs = field(default_factory=StopArgs)
+    # Staging with a calibrated camera: --staging.calibration=PATH, --staging.tolerance=0.02 (metres),
+    # --staging.object_size=0.03, --staging.viewer=serve|spawn|none.
+    staging: StagingArgs = field(default_factory=StagingArgs)
 
 
 def resume_args(argv: list[str]) -> list[str]:
@@ -137,8 +142,9 @@ def resume_args(argv: list[str]) -> list[str]:
     return [f"--config_path={stored}", *argv] if "output_dir" in flags and stored.is_file() else argv
 
 
-# Choices of one session that a resumed run may make differently, so they are not stored in config.json.
-SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes")
+# Choices of one session that a resumed run may make differently (the staging camera's included), so they are not
+# stored in config.json.
+SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging")
 
 
 # Settings of interleaved runs (--policies), left out of a single-policy run's config.json while at their default.

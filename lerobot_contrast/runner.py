@@ -100,7 +100,7 @@ class RobotRunner:
             episode = yield from self._run_episode(context)
             if episode.ended_by in ABORTS:
                 return self._aborted(context, staging, episode)
-            scene_after = self._scene_after(context, episode)
+            scene_after = self._scene_after(context, episode, staging)
             label = self._label(context, episode, scene_after)
             if label.action == "done":
                 return self._finish(context, staging, episode, scene_after, label)
@@ -117,6 +117,10 @@ class RobotRunner:
             context = replace(context, current=scene_after)
 
     def _stage(self, context: TrialContext) -> Staging:
+        bench = getattr(self.operator, "bench", None)
+        if bench is not None:  # a calibrated camera shows the targets and measures the placement (staging/check.py)
+            place = (lambda: self.robot.stage_scene(context.instance.scene)) if self.scene_io else None
+            return bench.stage(self.robot, context, self.operator, place)
         staging = Staging("ready") if self.operator is None else self.operator.stage(context)
         if staging.action == "ready" and self.scene_io:  # in simulation the "operator's hands" place the objects
             self.robot.stage_scene(context.instance.scene)
@@ -213,11 +217,14 @@ class RobotRunner:
             f"({' '.join(str(error).split())}); check it, then continue the run"
         )
 
-    def _scene_after(self, context: TrialContext, episode: Episode) -> Scene:
+    def _scene_after(self, context: TrialContext, episode: Episode, staging: Staging) -> Scene:
         if self.scene_io:
             return read_scene(self.robot)
         robot = episode.path[-1] if episode.path else context.instance.scene.robot
-        return Scene(dict(context.instance.scene.objects), robot)  # objects assumed where they were staged
+        staged = Scene(dict(context.instance.scene.objects), robot)  # objects assumed where they were staged
+        if staging.measured is None:
+            return staged
+        return self.operator.bench.scene_after(self.robot, staged, staging.measured)  # where the camera saw them
 
     def _label(self, context: TrialContext, episode: Episode, scene_after: Scene) -> Label:
         instance = context.instance
@@ -283,6 +290,8 @@ class RobotRunner:
             extra["reset_s"] = round(staging.reset_s, 3)
             if staging.moved is not None:
                 extra["moved_reported"] = staging.moved
+            if staging.measured is not None:
+                extra["staging"] = dict(staging.measured)
         return extra
 
 

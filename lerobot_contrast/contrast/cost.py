@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Protocol
 
 from lerobot_contrast.contrast.errors import UserError
@@ -79,7 +80,12 @@ class ResetTimeCost:
         return sum(self.handling_s.get(n, self.per_object_s) + d / self.hand_speed_m_s for n, d in moves.items())
 
 
-COST_MODELS = {"distance": DistanceCost, "reset_time": ResetTimeCost}
+# measured: planned as distance; a calibrated camera's measurement of each staging replaces it (staging/check.py).
+COST_MODELS = {
+    "distance": DistanceCost,
+    "reset_time": ResetTimeCost,
+    "measured": partial(DistanceCost, name="measured"),
+}
 
 
 def make_cost_model(name: str) -> CostModel:

@@ -74,7 +74,7 @@ class Bench:
         memory = self._recall(context.index)
         seen = self.measure(self.frame(robot))
         before = memory["before"] if memory else _merged(context.current, seen)
-        believed = _merged(context.current, seen if not memory else {**memory["placed"], **seen})
+        believed = _merged(context.current, seen if not memory else {**memory["placed"].objects, **seen})
         target = context.instance.scene
         self.show(robot, believed, target, None, _console_text(context))
         with self._live(robot):

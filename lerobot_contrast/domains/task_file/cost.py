@@ -10,8 +10,8 @@ from lerobot_contrast.domains.task_file.schema import CostSpec
 
 def make_cost_model(spec: CostSpec, name: str) -> CostModel:
     """The `--cost` model `name` with the task file's parameters."""
-    if name == "distance":
-        return DistanceCost(tolerance=spec.tolerance, add_remove_m=spec.add_remove)
+    if name in ("distance", "measured"):  # measured: planned as distance, then measured by a calibrated camera
+        return DistanceCost(tolerance=spec.tolerance, add_remove_m=spec.add_remove, name=name)
     if name == "reset_time":
         return ResetTimeCost(
             per_object_s=spec.default_handling_s,
