@@ -1,0 +1,25 @@
+"""One LIBERO simulator for the module (building a LIBERO scene takes tens of seconds on a CPU), at 128x128."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --libero")
+
+
+@pytest.fixture(scope="package")
+def libero_robot():
+    from lerobot_contrast.domains.libero.config_libero_sim import LiberoSimConfig
+    from lerobot_contrast.domains.libero.libero_sim import LiberoSim
+
+    robot = LiberoSim(LiberoSimConfig(observation_width=128, observation_height=128))
+    robot.connect()
+    yield robot
+    robot.disconnect()
+
+
+@pytest.fixture(scope="package")
+def object_task():
+    from lerobot_contrast.domains.libero.task import LiberoObjectTask
+
+    return LiberoObjectTask(families=["task0"])
