@@ -8,6 +8,8 @@ import json
 import cv2
 import numpy as np
 import pytest
+import rerun as rr
+from rerun.experimental import RrdReader
 from rich.console import Console
 
 from lerobot_contrast.config import EvalConfig
@@ -53,7 +55,7 @@ class Hands(LanguageTableSim):
             super().stage_scene(scene)
 
 
-def evaluation(run_dir, calibration, robot, answers, *flags):
+def evaluation(run_dir, calibration, robot, answers, *flags, recording=None):
     cfg = parse_config(
         EvalConfig,
         ["--task=so101_blocks", "--robot.type=language_table_sim", "--operator=console", "--n_instances=1",
@@ -62,7 +64,7 @@ def evaluation(run_dir, calibration, robot, answers, *flags):
     planned = planned_evaluation(cfg)
     bench = Bench(
         calibration, geometry(planned.task, CUBE), planned.task.cost_model("distance"), tolerance=0.02,
-        measured_cost=cfg.cost == "measured", recording=None, run_dir=lambda: run_dir,
+        measured_cost=cfg.cost == "measured", recording=recording, run_dir=lambda: run_dir,
     )  # fmt: skip
     console = OperatorConsole(Answers(io.StringIO("".join(a + "\n" for a in answers))), Console(file=io.StringIO()))
     console.bench = bench
@@ -101,7 +103,9 @@ def test_a_block_placed_5_cm_off_is_caught_and_the_journal_records_what_was_move
     # Trial 1: red_cube slips 5 cm; the operator accepts it as placed. Trial 2: it slips again; the operator fixes it.
     robot.script = ["slip", "slip", "exact"]
     answers = ["", "a", "", "", "", ""]
-    run(evaluation(tmp_path / "run", calibration, robot, answers, "--cost=measured"))
+    view = rr.RecordingStream("lerobot_contrast_staging")
+    logged = view.memory_recording()
+    run(evaluation(tmp_path / "run", calibration, robot, answers, "--cost=measured", recording=view))
     first, second = journal(tmp_path / "run")[:2]
     staged = first["extra"]["staging"]
     assert staged["accepted_off"] == ["red_cube"] and staged["off_m"]["red_cube"] == pytest.approx(OFF, abs=0.01)
@@ -117,6 +121,10 @@ def test_a_block_placed_5_cm_off_is_caught_and_the_journal_records_what_was_move
     assert first["cost"] == pytest.approx(staged["moved_m"], abs=1e-4)  # --cost=measured
     assert second["extra"]["staging"]["accepted_off"] == []  # fixed, then measured again within 2 cm
     assert second["cost"] == pytest.approx(second["extra"]["staging"]["moved_m"], abs=1e-4)
+    # The live view showed the camera with the targets, the arrows and the console's text.
+    (tmp_path / "view.rrd").write_bytes(logged.drain_as_bytes())
+    entities = {chunk.entity_path for chunk in RrdReader(str(tmp_path / "view.rrd")).stream().to_chunks()}
+    assert {f"/staging/{path}" for path in ("camera", "camera/targets", "camera/arrows", "console")} <= entities
 
 
 def test_resume_after_a_stop_mid_staging_keeps_the_measured_scene(tmp_path, calibration, robot):
