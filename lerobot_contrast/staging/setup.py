@@ -56,10 +56,19 @@ def pick_camera(calibrations: dict[str, CameraCalibration], robot: Any, path: Pa
 def make_bench(
     args: StagingArgs, task_ref: str, task: Task, robot: Any, cost_name: str, run_dir: Callable[[], Path | None],
     recording: Any = None,
-) -> Bench | None:  # fmt: skip
-    """The bench, or None where there is no calibration to stage with (then --cost=measured is refused)."""
+) -> Any:  # fmt: skip
+    """The bench, or None where there is no calibration to stage with (then --cost=measured is refused). The
+    apartment's (VLN) bench is its top-down map, with no camera to calibrate."""
     if args.viewer not in VIEWERS:
         raise UserError(f"--staging.viewer: unknown {args.viewer!r}; choose from: {', '.join(VIEWERS)}")
+    from lerobot_contrast.domains.vln.task import VLNTask
+
+    if isinstance(task, VLNTask):
+        if cost_name == "measured":
+            raise UserError("--cost=measured needs a table camera; the apartment has none, use --cost=distance")
+        from lerobot_contrast.staging.apartment import MapBench
+
+        return MapBench(recording or open_view(args.viewer))
     path = args.calibration or default_calibration(task_ref)
     if path is None or (args.calibration is None and not path.is_file()):
         if cost_name == "measured":
@@ -84,8 +93,8 @@ def open_view(viewer: str) -> Any:
     recording = rr.RecordingStream("lerobot_contrast_staging")
     if viewer == "serve":
         url = recording.serve_grpc()
-        print(f"staging view: run `rerun --connect {url}` (or `rerun` and open that address) to watch the camera")
+        print(f"staging view: run `rerun --connect {url}` in another terminal to see where each object goes")
     elif viewer == "spawn":
         recording.spawn()
-        print("staging view: the Rerun viewer opens with the camera view")
+        print("staging view: the Rerun viewer opens, showing where each object goes")
     return recording
