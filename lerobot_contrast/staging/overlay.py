@@ -87,7 +87,8 @@ def draw(image: np.ndarray, overlay: list[Mark]) -> np.ndarray:
             cv2.polylines(out, [np.round(mark.outline).astype(np.int32)], True, colour, round(2 * scale), cv2.LINE_AA)
         if mark.start is not None and mark.end is not None and mark.state == "move":
             start, end = tuple(np.round(mark.start).astype(int)), tuple(np.round(mark.end).astype(int))
-            cv2.arrowedLine(out, start, end, colour, round(2 * scale), cv2.LINE_AA, tipLength=0.15)
+            tip = min(0.3, 12 * scale / max(1.0, float(np.linalg.norm(mark.end - mark.start))))  # a tip of ~12 px
+            cv2.arrowedLine(out, start, end, colour, round(2 * scale), cv2.LINE_AA, tipLength=tip)
         if mark.state == "stay":  # only its outline: the picture names what to move
             continue
         anchor = mark.end if mark.end is not None else mark.start
