@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from lerobot_contrast.contrast.cost import CostModel
+from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.staging import locate, overlay
@@ -143,7 +144,10 @@ class Bench:
         path = self._memory_path()
         if path is None or not path.is_file():
             return None
-        data = json.loads(path.read_text(encoding="utf-8"))
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            raise UserError(f"{path}: cannot read what the last staging measured; delete it to stage afresh") from None
         if data.get("trial") != index:  # another trial's: it was journalled, and its scene_after says the rest
             return None
         return {key: Scene.from_json({"objects": data[key]}) for key in ("before", "placed")}
