@@ -55,7 +55,7 @@ class Hands(LanguageTableSim):
             super().stage_scene(scene)
 
 
-def evaluation(run_dir, calibration, robot, answers, *flags, recording=None):
+def evaluation(run_dir, calibration, robot, answers, *flags, recording=None, console_class=OperatorConsole):
     cfg = parse_config(
         EvalConfig,
         ["--task=so101_blocks", "--robot.type=language_table_sim", "--operator=console", "--n_instances=1",
@@ -66,7 +66,7 @@ def evaluation(run_dir, calibration, robot, answers, *flags, recording=None):
         calibration, geometry(planned.task, CUBE), planned.task.cost_model("distance"), tolerance=0.02,
         measured_cost=cfg.cost == "measured", recording=recording, run_dir=lambda: run_dir,
     )  # fmt: skip
-    console = OperatorConsole(Answers(io.StringIO("".join(a + "\n" for a in answers))), Console(file=io.StringIO()))
+    console = console_class(Answers(io.StringIO("".join(a + "\n" for a in answers))), Console(file=io.StringIO()))
     console.bench = bench
     policy = make_policy(cfg.policy, robot, planned.task, {})
     return dataclasses.replace(equipped(cfg, planned, robot, policy, console), verbose=False)
@@ -141,3 +141,42 @@ def test_resume_after_a_stop_mid_staging_keeps_the_measured_scene(tmp_path, cali
     # The effort before the stop counts: moved from where the blocks were before the first staging began.
     assert first["before"]["red_cube"][:2] == pytest.approx([0.15, 0.35])
     assert first["moved_m"] == pytest.approx(first["planned_cost"], abs=0.08)
+
+
+class CameraOnly:
+    """The simulated table seen only through its camera, as a real arm's is: it cannot report or stage its scene."""
+
+    name = "camera_only_table"
+
+    def __init__(self) -> None:
+        self.sim = LanguageTableSim(LanguageTableSimConfig(camera=True))
+        self.observation_features, self.action_features = self.sim.observation_features, self.sim.action_features
+        self.connect, self.disconnect = self.sim.connect, self.sim.disconnect
+        self.get_observation, self.send_action = self.sim.get_observation, self.sim.send_action
+
+    @property
+    def is_connected(self) -> bool:
+        return self.sim.is_connected
+
+
+def test_without_scene_reports_the_next_trial_starts_from_where_the_camera_saw_the_blocks(tmp_path, calibration):
+    robot = CameraOnly()
+    robot.connect()
+
+    class SlippingHands(OperatorConsole):  # the operator stages while the console waits, red_cube 5 cm off
+        def stage(self, context):
+            staging = super().stage(context)
+            red = context.instance.scene.objects["red_cube"]
+            robot.sim.stage_scene(context.instance.scene.with_object("red_cube", Pose(red.x, red.y + OFF, red.yaw)))
+            return staging
+
+    answers = ["", "a", "n", "", "a", "n"]
+    run(evaluation(tmp_path / "run", calibration, robot, answers, console_class=SlippingHands))
+    first, second = journal(tmp_path / "run")[:2]
+    target = first["instance"]["scene"]["objects"]["red_cube"]
+    # Not the plan's target: where the camera saw the red cube after the episode, 5 cm off.
+    assert first["scene_after"]["objects"]["red_cube"][:2] == pytest.approx([target[0], target[1] + OFF], abs=0.015)
+    assert second["extra"]["staging"]["before"]["red_cube"][:2] == pytest.approx(
+        first["scene_after"]["objects"]["red_cube"][:2], abs=0.01
+    )
+    robot.disconnect()
