@@ -92,7 +92,13 @@ def open_view(viewer: str) -> Any:
         return None
     recording = rr.RecordingStream("lerobot_contrast_staging")
     if viewer == "serve":
-        url = recording.serve_grpc()
+        try:
+            url = recording.serve_grpc()
+        except Exception as error:  # the port is taken, most likely by another run's view
+            raise UserError(
+                f"--staging.viewer=serve: cannot serve the staging view ({' '.join(str(error).split())}); "
+                "use --staging.viewer=spawn or none"
+            ) from None
         print(f"staging view: run `rerun --connect {url}` in another terminal to see where each object goes")
     elif viewer == "spawn":
         recording.spawn()
