@@ -70,3 +70,11 @@ def test_no_board_in_view_or_a_poor_fit_is_one_line(renderer, tmp_path, capsys):
     error = capsys.readouterr().err.strip()
     assert "reprojection error" in error and "--max_error_px=0.01" in error and "\n" not in error
     assert not out.exists()
+
+
+@pytest.mark.slow  # ~30 s alone: loading every LeRobot robot type, which the suite's eval tests load anyway
+def test_the_robots_cameras_are_read_with_evals_robot_flags(tmp_path, capsys):
+    # The simulated table's camera through the robot path (connect, a frame per camera, disconnect): no board on it.
+    assert main(["--robot.type=language_table_sim", f"--output={tmp_path / 'cal.json'}"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.startswith("error: camera top: board not found") and "\n" not in error
