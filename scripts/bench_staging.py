@@ -1,0 +1,86 @@
+"""How well the staging bench measures on the tabletop simulator's camera: the fitted homography against the
+simulator's own, and where the colour check places randomly laid cubes against where they are.
+
+    .venv/bin/python scripts/bench_staging.py [--layouts=200]
+
+Figures last, on one line: name=value pairs (pixels at 320 x 180 and 640 x 360; centimetres).
+"""
+
+from __future__ import annotations
+
+import sys
+
+import cv2
+import numpy as np
+
+from lerobot_contrast.domains.language_table import board as tabletop
+from lerobot_contrast.domains.language_table.render import TabletopRenderer
+from lerobot_contrast.staging import board, homography, locate
+
+WHERE = board.BoardArgs(x=0.35, y=0.0, yaw_deg=10.0)
+WORKSPACE = ((0.15, -0.25), (0.45, 0.25))  # so101_blocks
+GRID = np.array([[x, y] for x in np.linspace(0.15, 0.45, 7) for y in np.linspace(-0.25, 0.25, 7)])
+CUBES = ("red_cube", "green_cube", "blue_cube", "yellow_cube")
+
+
+def sim_pixels(renderer: TabletopRenderer, xy: np.ndarray) -> np.ndarray:
+    return renderer.project(np.column_stack([xy, np.zeros(len(xy))])) - 0.5
+
+
+def board_frame(renderer: TabletopRenderer) -> np.ndarray:
+    page, per_m = board.page_image(dpi=150)
+    margin = round(board.MARGIN_M * per_m)
+    corners = np.array([[0, 0], [page.shape[1], 0], [page.shape[1], page.shape[0]], [0, page.shape[0]]], float) - 0.5
+    on_table = board.board_to_table((corners + 0.5 - margin) / per_m, WHERE)
+    warp = cv2.getPerspectiveTransform(corners.astype(np.float32), sim_pixels(renderer, on_table).astype(np.float32))
+    size = (renderer.camera.width, renderer.camera.height)
+    image = renderer.render({})
+    covered = cv2.warpPerspective(np.full(page.shape, 255, np.uint8), warp, size) > 127
+    image[covered] = cv2.warpPerspective(cv2.cvtColor(page, cv2.COLOR_GRAY2RGB), warp, size)[covered]
+    return image
+
+
+def layouts(n: int, rng: np.random.Generator) -> list[dict[str, tuple[float, float, float]]]:
+    """Cube layouts as so101_blocks places them: in its play area, at least 6 cm apart."""
+    out = []
+    while len(out) < n:
+        xy = np.column_stack([rng.uniform(0.19, 0.41, 4), rng.uniform(-0.2, 0.2, 4)])
+        gaps = np.linalg.norm(xy[:, None] - xy[None], axis=2) + np.eye(4)
+        if gaps.min() > 0.06:
+            out.append({name: (*p, rng.uniform(-np.pi, np.pi)) for name, p in zip(CUBES, xy, strict=True)})
+    return out
+
+
+def main() -> int:
+    n = int(next((a.split("=")[1] for a in sys.argv[1:] if a.startswith("--layouts=")), 200))
+    figures = {}
+    for height, width in ((180, 320), (360, 640)):
+        renderer = TabletopRenderer(height, width)
+        calibration = homography.fit("top", board_frame(renderer), WHERE, max_error_px=2.0)
+        error = np.abs(calibration.to_pixels(GRID) - sim_pixels(renderer, GRID)).max()
+        figures[f"homography_max_px_{width}"] = round(float(error), 3)
+        figures[f"board_rms_px_{width}"] = round(calibration.error_px, 3)
+    renderer = TabletopRenderer()
+    calibration = homography.fit("top", board_frame(renderer), WHERE, max_error_px=2.0)
+    misses, errors = 0, []
+    colours = {name: name.split("_")[0] for name in CUBES}
+    for blocks in layouts(n, np.random.default_rng(0)):
+        seen = locate.find_objects(
+            renderer.render(blocks, (0.2, 0.0)), calibration, colours, WORKSPACE, tabletop.SHAPE_FOOTPRINT["cube"][0]
+        )
+        misses += len(CUBES) - len(seen)
+        errors += [np.hypot(x - blocks[name][0], y - blocks[name][1]) for name, (x, y) in seen.items()]
+    errors = np.array(errors) * 100
+    figures |= {
+        "locate_median_cm": round(float(np.median(errors)), 2),
+        "locate_p95_cm": round(float(np.percentile(errors, 95)), 2),
+        "locate_max_cm": round(float(errors.max()), 2),
+        "cubes_missed": misses,
+        "cubes": n * len(CUBES),
+    }
+    print(" ".join(f"{k}={v}" for k, v in figures.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
