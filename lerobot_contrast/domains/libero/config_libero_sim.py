@@ -18,7 +18,8 @@ class LiberoSimConfig(RobotConfig):
     # The camera size; LeRobot's `--env.type=libero` default is 360x360, and its LIBERO checkpoints resize.
     observation_width: int = 360
     observation_height: int = 360
-    # Simulator steps with a no-op action after a reset or a staged move, so objects come to rest before the trial.
+    # Control periods of physics after staging a scene, the arm held still, so objects come to rest before the trial
+    # (LeRobot's own reset waits as many no-op steps).
     settle_steps: int = 10
 
     def __post_init__(self) -> None:

@@ -128,12 +128,20 @@ class World:
         sim.forward()
 
     def _settle(self) -> None:
-        from lerobot.envs.libero import get_libero_dummy_action
-
-        raw = None
-        for _ in range(max(1, self.config.settle_steps)):
-            raw, _, _, _ = self.env._env.step(get_libero_dummy_action())
-        self.raw = self.env._format_raw_obs(raw)
+        """Let the objects come to rest for `settle_steps` control periods of physics, the arm held where it was
+        staged, and render once: a staged scene is a new episode for robosuite (its step count and horizon restart)."""
+        inner = self.inner()
+        sim = inner.sim
+        hold = sim.data.qpos[: suites.ROBOT_QPOS].copy()
+        hold[7:] = self.rest[8 : 1 + suites.ROBOT_QPOS]  # the gripper open, as LeRobot's no-op steps leave it
+        substeps = max(1, self.config.settle_steps) * round(inner.control_timestep / inner.model_timestep)
+        for _ in range(substeps):
+            sim.step()
+            sim.data.qpos[: suites.ROBOT_QPOS] = hold
+            sim.data.qvel[: suites.ROBOT_QPOS] = 0.0
+        sim.forward()
+        inner.timestep, inner.done = 0, False
+        self.raw = self.env._format_raw_obs(inner._get_observations(force_update=True))
 
     def observation(self) -> dict[str, Any]:
         if self.raw is None:

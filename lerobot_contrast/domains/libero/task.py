@@ -4,9 +4,11 @@ judged by LIBERO's BDDL goal in the simulator that holds the scene."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
+from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.perturbation import PerturbationRegistry
@@ -36,6 +38,29 @@ def parse_families(suite: str, families: Sequence[str] | None) -> list[int]:
             raise UserError(f"--families: {suite} has no task {name!r}; choose from task0 to task{n - 1}")
         ids.append(int(text))
     return ids
+
+
+@dataclass(frozen=True)
+class WorldChangeCost:
+    """A cost model that carries objects a scene lacks to or from storage: going from one LIBERO world to another
+    clears the table and sets the new one, and pays for every object of both."""
+
+    inner: CostModel
+    storage: Scene
+
+    @property
+    def name(self) -> str:
+        return self.inner.name
+
+    @property
+    def unit(self) -> str:
+        return self.inner.unit
+
+    def __call__(self, current: Scene, target: Scene) -> float:
+        def filled(scene: Scene) -> Scene:
+            return Scene(objects={**self.storage.objects, **scene.objects}, robot=scene.robot)
+
+        return self.inner(filled(current), filled(target))
 
 
 class LiberoTask(Task):
@@ -79,6 +104,9 @@ class LiberoTask(Task):
     def storage_scene(self) -> Scene:
         names = sorted({name for task_id in self.task_ids for name in suites.task_info(self.suite, task_id).objects})
         return Scene(objects={name: Pose(STORAGE_SPACING * k, STORAGE_Y) for k, name in enumerate(names)})
+
+    def cost_model(self, name: str) -> CostModel:
+        return WorldChangeCost(super().cost_model(name), self.storage_scene())
 
     def rebase(self, instance: Instance, scene: Scene) -> Instance | None:
         """The instruction in `scene`: only where `scene` is the same LIBERO world (the same objects)."""

@@ -37,3 +37,15 @@ def test_each_perturbation_changes_what_it_declares(suite):
                 assert (name in named) == (perturbation.axis == "SB")
                 assert out.instruction == instance.instruction and out.goal == instance.goal
     assert applied == {"L", "LB", "S", "SB"}
+
+
+def test_going_to_another_libero_world_pays_for_clearing_the_table_and_setting_the_new_one():
+    task = load_task("libero_object")
+    a, b = task.instance(0, 0), task.instance(1, 0)
+    storage, cost = task.storage_scene(), task.cost_model("distance")
+    leaving, arriving = set(a.scene.objects) - set(b.scene.objects), set(b.scene.objects) - set(a.scene.objects)
+    assert leaving and arriving
+    carried = sum(a.scene.objects[n].distance_to(storage.objects[n]) for n in leaving)
+    carried += sum(storage.objects[n].distance_to(b.scene.objects[n]) for n in arriving)
+    assert cost(a.scene, b.scene) >= carried > 0.5
+    assert cost(a.scene, a.scene) == 0.0
