@@ -82,6 +82,16 @@ def cli(*args: str) -> subprocess.CompletedProcess:
     )
 
 
+def refused_resume(run: Path, capsys) -> tuple[int, str]:
+    """A resume that must refuse before any trial runs, in this process: the same main as the command, without
+    another interpreter loading torch and LeRobot (seconds a test)."""
+    from lerobot_contrast.eval import main
+
+    capsys.readouterr()
+    code = main([*ARGS, f"--output_dir={run}", "--resume=true"])
+    return code, capsys.readouterr().err
+
+
 def killed_at(moment: str, at: int, *args: str) -> subprocess.CompletedProcess:
     command = [sys.executable, "-c", KILLER, moment, str(at), *args]
     return subprocess.run(command, capture_output=True, text=True, timeout=300)
@@ -272,26 +282,28 @@ DATASET_DAMAGE = {
 
 @pytest.mark.slow
 @pytest.mark.parametrize("case", DATASET_DAMAGE)
-def test_a_resume_refuses_a_dataset_that_lacks_what_the_journal_names_naming_the_file(tmp_path, reference, case):
+def test_a_resume_refuses_a_dataset_that_lacks_what_the_journal_names_naming_the_file(
+    tmp_path, reference, case, capsys
+):
     pattern, damage, named, said = DATASET_DAMAGE[case]
     run = tmp_path / "run"
     shutil.copytree(reference, run)
     (target,) = run.glob(pattern)
     damage(target)
     before = files(run)
-    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
-    assert resumed.returncode == 2 and resumed.stderr.count("\n") == 1, resumed.stderr[-3000:]
-    assert resumed.stderr.startswith(f"error: {target}{named} {said}"), resumed.stderr
-    assert "; restore it from a copy and resume, or run the evaluation again into a new --output_dir" in resumed.stderr
+    code, err = refused_resume(run, capsys)
+    assert code == 2 and err.count("\n") == 1, err[-3000:]
+    assert err.startswith(f"error: {target}{named} {said}"), err
+    assert "; restore it from a copy and resume, or run the evaluation again into a new --output_dir" in err
     assert files(run) == before
 
 
 @pytest.mark.slow
-def test_a_resume_refuses_a_deleted_dataset_the_journal_names(tmp_path, reference):
+def test_a_resume_refuses_a_deleted_dataset_the_journal_names(tmp_path, reference, capsys):
     run = tmp_path / "run"
     shutil.copytree(reference, run)
     shutil.rmtree(run / "dataset")
-    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
-    assert resumed.returncode == 2 and resumed.stderr.count("\n") == 1, resumed.stderr[-3000:]
-    assert resumed.stderr.startswith(f"error: {run / 'dataset'} is missing, but the journal names "), resumed.stderr
+    code, err = refused_resume(run, capsys)
+    assert code == 2 and err.count("\n") == 1, err[-3000:]
+    assert err.startswith(f"error: {run / 'dataset'} is missing, but the journal names "), err
     assert not (run / "dataset").exists()
