@@ -38,7 +38,7 @@ from lerobot_contrast.flags import (
     robot_type,
     wants_help,
 )
-from lerobot_contrast.lane_choice import choose_lanes, parse_lanes, use_threads
+from lerobot_contrast.lane_choice import choose_lanes, lane_threads, parse_lanes, use_threads
 from lerobot_contrast.operator_console import OperatorConsole, SessionStopped
 from lerobot_contrast.policies import Policy, default_policy, make_policy
 from lerobot_contrast.progress import RunProgress, header_lines
@@ -213,13 +213,17 @@ def equipped(
     cfg: EvalConfig, planned: Evaluation, robot: Robot, policy: Policy, operator: OperatorConsole | None
 ) -> Evaluation:
     """The planned evaluation with its connected robot, policy, operator and observers, recorded in cfg.output_dir."""
+    fps = run_fps(cfg, robot)
+    lanes = choose_lanes(
+        cfg.lanes, robot, policy, operator=operator is not None, fps=fps, max_episode_s=cfg.max_episode_s
+    )
     return dataclasses.replace(
         planned,
         policy=policy,
         robot=robot,
         observers=make_observers(cfg, planned.task, robot, cfg.output_dir),
         operator=operator,
-        fps=run_fps(cfg, robot),
+        fps=fps,
         max_steps=cfg.max_episode_steps,
         max_episode_s=cfg.max_episode_s,
         output_dir=cfg.output_dir,
@@ -229,10 +233,8 @@ def equipped(
         config_defaults=config_json(EvalConfig()),
         labels={"strategy": cfg.strategy, "policy": cfg.policy.path or cfg.policy.type or default_policy(cfg.task)},
         verbose=True,
-        lanes=choose_lanes(
-            cfg.lanes, robot, policy, operator=operator is not None, fps=run_fps(cfg, robot),
-            max_episode_s=cfg.max_episode_s,
-        ),  # fmt: skip
+        lanes=lanes,
+        lane_threads=lane_threads(lanes),
         policy_for=lambda lane_robot: make_policy(cfg.policy, lane_robot, planned.task, cfg.rename_map),
     )
 

@@ -79,6 +79,7 @@ class Evaluation:
     adaptive: bool = False  # --order=adaptive: each next trial is chosen from the outcomes so far (adaptive.py)
     lanes: int = 1  # simulated chains of trials run side by side (lane_runner.py), with the same results as one
     policy_for: Callable[[Any], Policy] | None = None  # the policy for another lane's robot (None: a copy)
+    lane_threads: int = 1  # threads that answer the lanes (lane_choice.lane_threads)
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -251,7 +252,7 @@ def _executor(ev: Evaluation, state: LoopState) -> Execute:
             ev.task, ev.plan[state.next_index :], ev.seed, (state.scene, state.previous), ev.robot, ev.lanes,
             ev.policy, lambda robot, seat, observers: _runner(ev, robot, seat, observers),
             lambda trial, staged, scene: _context(ev, trial, staged, scene),
-            ev.observers, ev.policy_for,
+            ev.observers, ev.policy_for, ev.lane_threads,
         )  # fmt: skip
     return _runner(ev, ev.robot, ev.policy, ev.observers)
 

@@ -4,15 +4,14 @@ to the share it leaves, instead of stalling threads that wait on each other)."""
 
 from __future__ import annotations
 
+import os
 from contextlib import suppress
 from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
 
-# Lanes `--lanes=auto` runs with. One for now: an episode a robot aborts cannot yet be replayed from a lane to the
-# Rerun recorder (a plugin robot whose link drops crashed the run). `--lanes=N` asks for N: on 2 cores 8 lanes of the
-# learned default took 0.36 of one lane's CPU time, with identical journals (scripts/bench_lanes.py --lanes=8).
-AUTO_LANES = 1
+# Lanes `--lanes=auto` runs on our simulators: scripts/bench_lanes.py measures their speed and memory.
+AUTO_LANES = 8
 EVAL_THREADS = 1
 
 
@@ -49,7 +48,19 @@ def choose_lanes(
         return 1
     if requested is not None:
         return requested
-    return AUTO_LANES
+    return AUTO_LANES if _ours(robot) else 1
+
+
+def _ours(robot: Any) -> bool:
+    """Whether `robot` is one of our simulators, not a subclass from another package: a plugin's copies may share a
+    link or state (a counter on the class), so it gets lanes only when asked for."""
+    return type(robot).__module__.split(".")[0] == "lerobot_contrast"
+
+
+def lane_threads(lanes: int) -> int:
+    """Threads that answer the lanes: two where this process may use two cores, half the lanes each."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return 2 if lanes > 1 and cores > 1 else 1
 
 
 def use_threads(threads: int = EVAL_THREADS) -> None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable, Generator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -52,9 +53,10 @@ class EpisodeTape(QuietObserver):
         self.pose_keys: tuple[str, str] | None = None
         self.steps: list[tuple[float, dict[str, Any], dict[str, Any]]] = []
         self.nbytes = 0
+        self.started = False  # a trial refused before its episode (a robot lost earlier) shows the observers nothing
 
     def start(self, context: TrialContext, features: dict[str, dict], pose_keys: tuple[str, str] | None) -> None:
-        self.features, self.pose_keys, self.steps, self.nbytes = features, pose_keys, [], 0
+        self.features, self.pose_keys, self.steps, self.nbytes, self.started = features, pose_keys, [], 0, True
 
     def step(self, timestamp_s: float, observation: dict[str, Any], action: dict[str, Any]) -> None:
         kept = {k: v.copy() if hasattr(v, "copy") else v for k, v in observation.items()}  # robots reuse buffers
@@ -62,6 +64,8 @@ class EpisodeTape(QuietObserver):
         self.nbytes += sum(getattr(v, "nbytes", 8) for v in kept.values())
 
     def play(self, context: TrialContext, observers: Sequence[EpisodeObserver]) -> None:
+        if not self.started:
+            return
         for observer in observers:
             observer.start(context, self.features, self.pose_keys)
         for timestamp_s, observation, action in self.steps:
@@ -109,11 +113,15 @@ class LaneRunner:
         context_for: ContextFor,
         observers: Sequence[EpisodeObserver] = (),
         policy_for: PolicyFor | None = None,
+        threads: int = 1,
     ) -> None:
         self.task, self.seed, self.context_for = task, seed, context_for
         self.copies = [_copy(robot) for _ in range(lanes - 1)]
-        self.policy = lane_policy(policy, [robot, *self.copies], policy_for)
+        self.policy = lane_policy(policy, [robot, *self.copies], policy_for, threads)
         self.observers = list(observers)
+        # With two threads, half the lanes are answered beside the other half's answer and steps (torch and the
+        # renderer let go of the GIL); a row's action is the same in any batch, so the split changes no result.
+        self.pool = ThreadPoolExecutor(1, "lanes") if threads > 1 and self.policy.batched else None
         self.waiting = deque(chains(plan))
         self.results: dict[int, Result] = {}
         self.lanes: list[Lane] = []
@@ -123,8 +131,13 @@ class LaneRunner:
             self.lanes.append(Lane(i, runner, tape))
         self.start_scene, self.start_previous = start
         self.head = plan[0].index if plan else -1
+        # The first trial after which a lane's robot was lost for good: with one robot, every later trial of the
+        # run is refused, whichever chain it belongs to.
+        self.halt: tuple[int, Exception] | None = None
 
     def __call__(self, context: TrialContext) -> Outcome:
+        if self.halt is not None and context.index > self.halt[0]:
+            raise self.halt[1]
         while context.index not in self.results:
             self._advance()
         result = self.results.pop(context.index)
@@ -138,6 +151,9 @@ class LaneRunner:
 
     def close(self) -> None:
         """Disconnect the robot's copies (the first lane's robot is the caller's)."""
+        if self.pool is not None:
+            self.pool.shutdown()
+            self.pool = None
         for robot in self.copies:
             if robot.is_connected:
                 robot.disconnect()
@@ -153,8 +169,20 @@ class LaneRunner:
             if not self.waiting:
                 raise RuntimeError("lanes: a trial was asked for that no chain of the plan holds")
             return
-        actions = self.policy.act([lane.index for lane in active], [lane.observation for lane in active])
-        for lane, action in zip(active, actions, strict=True):
+        if self.pool is None or len(active) < 2 * self.policy.min_rows:  # halves below it cost a whole call each
+            self._step(active)
+            return
+        first, second = active[: (len(active) + 1) // 2], active[(len(active) + 1) // 2 :]
+        later = self.pool.submit(self._answer, second, 1)
+        self._step(first)
+        for lane, action in zip(second, later.result(), strict=True):
+            self._send(lane, action)
+
+    def _answer(self, lanes: Sequence[Lane], thread: int = 0) -> list[dict[str, Any]]:
+        return self.policy.act([lane.index for lane in lanes], [lane.observation for lane in lanes], thread)
+
+    def _step(self, lanes: Sequence[Lane]) -> None:
+        for lane, action in zip(lanes, self._answer(lanes), strict=True):
             self._send(lane, action)
 
     def lanes_busy(self) -> bool:
@@ -206,6 +234,9 @@ class LaneRunner:
             lane.runner.observers = [lane.tape]
         if outcome is not None and outcome.status in STAGED:
             lane.scene = outcome.scene_after
+        halted = lane.runner.halted
+        if halted is not None and (self.halt is None or lane.trial.index < self.halt[0]):
+            self.halt = (lane.trial.index, halted)
 
 
 def _copy(robot: Any) -> Any:

@@ -26,7 +26,9 @@ class LanePolicy(Protocol):
 
     def start(self, lane: int, context: TrialContext) -> None: ...
 
-    def act(self, lanes: Sequence[int], observations: Sequence[Observation]) -> list[dict[str, float]]: ...
+    def act(
+        self, lanes: Sequence[int], observations: Sequence[Observation], thread: int = 0
+    ) -> list[dict[str, float]]: ...
 
     def done(self, lane: int) -> bool: ...
 
@@ -44,7 +46,7 @@ class CopiedLanes:
     def start(self, lane: int, context: TrialContext) -> None:
         self.copies[lane].reset(context)
 
-    def act(self, lanes: Sequence[int], observations: Sequence[Observation]) -> list[dict[str, float]]:
+    def act(self, lanes: Sequence[int], observations: Sequence[Observation], thread: int = 0) -> list[dict[str, float]]:
         return [self.copies[lane].act(obs) for lane, obs in zip(lanes, observations, strict=True)]
 
     def done(self, lane: int) -> bool:
@@ -57,9 +59,11 @@ class BatchedLanes:
 
     batched = True
 
-    def __init__(self, policy: Policy, n: int) -> None:
+    def __init__(self, policy: Policy, n: int, threads: int = 1) -> None:
         self.noise_std = policy.noise_std if isinstance(policy, NoisyPolicy) else 0.0
-        self.policy = policy.policy if isinstance(policy, NoisyPolicy) else policy
+        inner = policy.policy if isinstance(policy, NoisyPolicy) else policy
+        self.policies = [inner, *(inner.lane_twin() for _ in range(threads - 1))]  # one per answering thread
+        self.min_rows = getattr(inner, "min_lane_rows", 1)
         self.instructions = [""] * n
         self.memories: list[dict[str, Any]] = [{} for _ in range(n)]
         self.rngs = [np.random.default_rng(0) for _ in range(n)]
@@ -69,9 +73,9 @@ class BatchedLanes:
         self.memories[lane] = {}
         self.rngs[lane] = context.rng
 
-    def act(self, lanes: Sequence[int], observations: Sequence[Observation]) -> list[dict[str, float]]:
+    def act(self, lanes: Sequence[int], observations: Sequence[Observation], thread: int = 0) -> list[dict[str, float]]:
         instructions = [self.instructions[lane] for lane in lanes]
-        actions = self.policy.act_lanes(observations, instructions, [self.memories[lane] for lane in lanes])
+        actions = self.policies[thread].act_lanes(observations, instructions, [self.memories[lane] for lane in lanes])
         if self.noise_std > 0:
             actions = [self._noisy(action, self.rngs[lane]) for lane, action in zip(lanes, actions, strict=True)]
         return actions
@@ -90,10 +94,12 @@ def batches_lanes(policy: Policy) -> bool:
     return getattr(inner, "batches_lanes", False)
 
 
-def lane_policy(policy: Policy, robots: Sequence[Any], policy_for: PolicyFor | None = None) -> LanePolicy:
-    """The policy for a lane per robot in `robots` (the first is `policy`'s own)."""
+def lane_policy(
+    policy: Policy, robots: Sequence[Any], policy_for: PolicyFor | None = None, threads: int = 1
+) -> LanePolicy:
+    """The policy for a lane per robot in `robots` (the first is `policy`'s own), answered from `threads` threads."""
     if batches_lanes(policy):
-        return BatchedLanes(policy, len(robots))
+        return BatchedLanes(policy, len(robots), threads)
     return CopiedLanes(policy, robots, policy_for)
 
 

@@ -83,6 +83,11 @@ class RobotRunner:
         # so that the trial that ended this way is journalled first.
         self._halt: Exception | None = None
 
+    @property
+    def halted(self) -> Exception | None:
+        """Why the session cannot go on after the last trial (raised when the next one starts), if it cannot."""
+        return self._halt
+
     def __call__(self, context: TrialContext) -> Outcome:
         return drive(self.trial(context), self.policy.act)
 

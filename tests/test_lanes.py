@@ -11,6 +11,7 @@ import pytest
 
 from lerobot_contrast.build import make_robot, register_robots
 from lerobot_contrast.config import EvalConfig, StopArgs
+from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
 from lerobot_contrast.eval import planned_evaluation
 from lerobot_contrast.evaluation import run
 from lerobot_contrast.lane_choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
@@ -18,6 +19,7 @@ from lerobot_contrast.lane_runner import chains
 from lerobot_contrast.lane_seats import batches_lanes
 from lerobot_contrast.policies import PolicyArgs, make_policy
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
+from lerobot_contrast.runner import RobotLostError
 
 WALL_CLOCK = ("started_at", "duration_s")
 register_robots()
@@ -43,22 +45,44 @@ class Watch(QuietObserver):
         return EpisodeFiles()
 
 
+class LostTabletop(LanguageTableSim):
+    """The tabletop behind a link that drops for good at its fifth action (each copy its own link)."""
+
+    def __init__(self, config):
+        super().__init__(config)
+        self.actions = 0
+
+    def connect(self, calibrate=True):
+        if self.actions:
+            raise ConnectionError("no route to host")
+        super().connect(calibrate)
+
+    def send_action(self, action):
+        self.actions += 1
+        if self.actions == 5:
+            raise ConnectionError("link lost")
+        return super().send_action(action)
+
+
 def evaluate(run_dir: Path, lanes: int, *, policy="oracle", task="language_table", n=3, steps=30, resume=False,
-             observers=(), **settings):  # fmt: skip
+             observers=(), robot_class=None, lane_threads=1, **settings):  # fmt: skip
     cfg = EvalConfig(task=task, n_instances=n, seed=5, max_episode_steps=steps, rerun=False, **settings)
     cfg.policy = PolicyArgs(type=policy)
     planned = planned_evaluation(cfg)
     robot = make_robot(cfg)
+    robot = robot if robot_class is None else robot_class(robot.config)
     robot.connect()
     try:
         evaluation = dataclasses.replace(
             planned, robot=robot, policy=make_policy(cfg.policy, robot, planned.task), max_steps=steps, lanes=lanes,
+            lane_threads=lane_threads,
             policy_for=lambda lane_robot: make_policy(cfg.policy, lane_robot, planned.task),
             observers=observers, output_dir=run_dir, resume=resume, config={"seed": 5, "task": task},
         )  # fmt: skip
         return run(evaluation)
     finally:
-        robot.disconnect()
+        if robot.is_connected:
+            robot.disconnect()
 
 
 def journal(run_dir: Path) -> list[dict]:
@@ -67,11 +91,14 @@ def journal(run_dir: Path) -> list[dict]:
 
 
 @pytest.mark.slow
-def test_the_learned_default_gives_one_lanes_journal_and_episodes_with_four(tmp_path):
+def test_the_learned_default_gives_one_lanes_journal_and_episodes_with_four_answered_by_two_threads(tmp_path):
     watched = {}
     for lanes in (1, 4):
         watched[lanes] = Watch()
-        evaluate(tmp_path / f"l{lanes}", lanes, policy="tabletop_pointer", n=4, steps=25, observers=[watched[lanes]])
+        evaluate(
+            tmp_path / f"l{lanes}", lanes, policy="tabletop_pointer", n=4, steps=25, observers=[watched[lanes]],
+            lane_threads=2,
+        )  # fmt: skip
     assert journal(tmp_path / "l1") == journal(tmp_path / "l4")
     assert watched[1].episodes == watched[4].episodes
     assert sum(len(e[3]) for e in watched[1].episodes) > 50  # the policy really drove the robot
@@ -111,6 +138,17 @@ def test_a_stopping_rule_stops_lanes_where_it_stops_one_lane(tmp_path):
     assert journal(tmp_path / "l1") == journal(tmp_path / "l4")
 
 
+def test_a_robot_lost_in_one_lane_stops_the_run_where_one_lane_stops_it(tmp_path):
+    watched = {}
+    for lanes in (1, 4):
+        watched[lanes] = Watch()
+        with pytest.raises(RobotLostError, match="could not reconnect"):
+            evaluate(tmp_path / f"l{lanes}", lanes, robot_class=LostTabletop, observers=[watched[lanes]])
+    assert [r["status"] for r in journal(tmp_path / "l4")] == ["aborted"]
+    assert journal(tmp_path / "l1") == journal(tmp_path / "l4")
+    assert watched[1].episodes == watched[4].episodes and len(watched[4].episodes) == 1
+
+
 def test_chains_start_where_a_trial_is_staged_in_full():
     plan = planned_evaluation(EvalConfig(n_instances=3, seed=5, repeats=2)).plan
     cut = chains(plan)
@@ -136,7 +174,7 @@ def test_hardware_runs_one_lane_and_says_so_for_more():
     assert choose_lanes("3", simulator, None, operator=False, fps=None) == 3
 
 
-def test_the_learned_default_answers_every_lane_in_one_call_and_auto_runs_one_lane(tmp_path):
+def test_the_learned_default_answers_every_lane_in_one_call_and_auto_runs_lanes_on_our_simulators(tmp_path):
     cfg = EvalConfig(n_instances=1)
     robot = make_robot(cfg)
     robot.connect()
@@ -146,6 +184,9 @@ def test_the_learned_default_answers_every_lane_in_one_call_and_auto_runs_one_la
         noisy = make_policy(PolicyArgs(noise_std=0.01), robot, task)
         oracle = make_policy(PolicyArgs(type="oracle"), robot, task)
         assert batches_lanes(learned) and batches_lanes(noisy) and not batches_lanes(oracle)
-        assert choose_lanes("auto", robot, learned, operator=False, fps=None) == AUTO_LANES == 1
+        assert choose_lanes("auto", robot, learned, operator=False, fps=None) == AUTO_LANES > 1
+        plugin = LostTabletop(robot.config)  # another package's subclass: its copies may share a link
+        assert choose_lanes("auto", plugin, learned, operator=False, fps=None) == 1
+        assert choose_lanes("3", plugin, learned, operator=False, fps=None) == 3
     finally:
         robot.disconnect()

@@ -7,6 +7,7 @@ is refused up front, with the keys to map through `--rename_map`.
 
 from __future__ import annotations
 
+import copy
 import os
 from collections.abc import Mapping, Sequence
 from contextlib import nullcontext
@@ -221,6 +222,18 @@ class PretrainedPolicy:
             robot_type=self.robot_type,
         )
         return make_robot_action(action, self.features)
+
+    @property
+    def min_lane_rows(self) -> int:
+        """Rows below which a `lane_step` call costs no less (it pads its batch up to them)."""
+        return getattr(self.policy, "lane_rows", (1,))[0]
+
+    def lane_twin(self) -> PretrainedPolicy:
+        """The same network behind processors of its own, to answer other lanes from another thread (a processor
+        pipeline keeps the transition it is working on)."""
+        twin = copy.copy(self)
+        twin.preprocessor, twin.postprocessor = copy.deepcopy(self.preprocessor), copy.deepcopy(self.postprocessor)
+        return twin
 
     def act_lanes(
         self, observations: Sequence[Mapping[str, Any]], instructions: Sequence[str], memories: list[dict[str, Any]]

@@ -71,6 +71,7 @@ def _privileged(batch: dict[str, Any], name: str) -> Tensor:
 class TabletopPointerPolicy(PreTrainedPolicy):
     config_class = TabletopPointerConfig
     name = "tabletop_pointer"
+    lane_rows = LANE_ROWS  # fewer rows cost as much as LANE_ROWS[0]: callers may group lanes by it
 
     def __init__(self, config: TabletopPointerConfig, dataset_meta: Any = None, **kwargs: Any) -> None:
         super().__init__(config)
@@ -155,15 +156,16 @@ class TabletopPointerPolicy(PreTrainedPolicy):
             if "text" not in memory:
                 memory["text"] = self.instruction(self.tokenizer([task], batch[STATE_KEY].device))
         tensors = {key: value for key, value in batch.items() if isinstance(value, Tensor)}
-        low, high = LANE_ROWS
+        # On a GPU the kernels are chosen by batch size, so every call runs on the same number of rows there.
+        low, high = LANE_ROWS if batch[STATE_KEY].device.type == "cpu" else (LANE_ROWS[1], LANE_ROWS[1])
         actions = []
         for start in range(0, len(memories), high):
             chunk = {key: _pad_rows(value[start : start + high], low) for key, value in tensors.items()}
-            actions.append(self._lane_chunk(chunk, memories[start : start + high]))
+            actions.append(self._lane_chunk(chunk, memories[start : start + high], low))
         return torch.cat(actions)
 
-    def _lane_chunk(self, batch: dict[str, Tensor], memories: list[dict[str, Tensor]]) -> Tensor:
-        rows, low = len(memories), LANE_ROWS[0]
+    def _lane_chunk(self, batch: dict[str, Tensor], memories: list[dict[str, Tensor]], low: int) -> Tensor:
+        rows = len(memories)
         image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
         logits, presence = self.heatmaps(image)
         text = {key: _pad_rows(torch.cat([m["text"][key] for m in memories]), low) for key in memories[0]["text"]}
