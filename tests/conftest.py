@@ -13,6 +13,21 @@ from tests.fake_hub import FakeHub
 signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+# The test files that start a local Ray: on one worker, so that two Ray clusters never start at once.
+RAY_FILES = {"test_sweep.py", "test_sweep_cluster.py"}
+
+
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook reads the groups
+def pytest_collection_modifyitems(config, items):
+    """With workers (`-n`, as .ci/run runs the suite), the Ray files' tests share one worker; the other tests go
+    wherever a worker is free (a module fixture then runs once per worker that needs it)."""
+    if config.getoption("dist", "no") == "no":
+        return
+    for item in items:
+        if item.path.name in RAY_FILES:
+            item.add_marker(pytest.mark.xdist_group("ray"))
+
+
 @pytest.fixture
 def hub(monkeypatch, tmp_path):
     """A fresh fake Hub, with every client setting pointed at it; nothing can reach the internet."""

@@ -73,6 +73,7 @@ def site(tmp_path_factory) -> Path:
 def evaluate(site: Path, run: Path, *flags: str) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site), *sys.path])}
     args = ["--n_instances=2", "--seed=5", "--perturbations=[L,SB2]", "--max_episode_steps=40", f"--output_dir={run}"]
+    args += ["--policy.type=oracle", "--rerun=false"]  # the robot is under test: the cheapest policy, no recordings
     return subprocess.run(
         [sys.executable, "-m", "lerobot_contrast.eval", "--robot.type=flaky_tabletop", *args, *flags],
         capture_output=True,

@@ -84,14 +84,14 @@ def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[st
     planned = plan_cells(cells)
     if cfg.dry_run:
         for cell in cells:
-            console.print(f"{cell.name}: {planned[cell.name]} planned trials", highlight=False)
-        console.print(f"{len(cells)} cells into {folder}", highlight=False)
+            console.print(f"{cell.name}: {planned[cell.name]} planned trials", highlight=False, soft_wrap=True)
+        console.print(f"{len(cells)} cells into {folder}", highlight=False, soft_wrap=True)
         return {}
     outcomes = {c.name: _finished(c) for c in cells if is_complete(Path(c.config.output_dir))}
     folder.mkdir(parents=True, exist_ok=True)
     write_index(folder, index_entries(cells, outcomes))
     if outcomes:
-        console.print(f"{len(outcomes)} of {len(cells)} cells already complete", highlight=False)
+        console.print(f"{len(outcomes)} of {len(cells)} cells already complete", highlight=False, soft_wrap=True)
     todo = [cell for cell in cells if cell.name not in outcomes]
     if todo:
         start_ray(cfg.ray)
