@@ -15,6 +15,8 @@ from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.eval import main
 from lerobot_contrast.pairing import command
+from lerobot_contrast.publish import main as publish
+from lerobot_contrast.report import main as report
 from lerobot_contrast.review import main as review
 from lerobot_contrast.runner import RobotRunner
 
@@ -63,9 +65,12 @@ def test_oracle_and_learned_default_share_each_start_scene_and_pay_restaging(tmp
     assert "restaging" in out and "oracle vs tabletop_pointer" in out
     comparison = (pair / "comparison.md").read_text()
     assert "oracle minus tabletop_pointer" in comparison and "ΔSB1" in comparison and "Each policy" in comparison
+    assert report([str(pair)]) == 0
+    text = (pair / "report" / "report.md").read_text()
+    assert "## Policies on the same plan" in text and "## Interleaved comparison: pair" in text
 
 
-def test_a_run_killed_between_two_policies_of_a_trial_resumes_without_losing_or_repeating(tmp_path, monkeypatch):
+def test_a_run_killed_between_two_policies_of_a_trial_resumes_without_losing_or_repeating(tmp_path, monkeypatch, hub):
     whole, cut = tmp_path / "whole", tmp_path / "cut"
     assert main([*SMALL, f"--policies={TWO_ORACLES}", f"--output_dir={whole}"]) == 0
     calls = []
@@ -89,6 +94,8 @@ def test_a_run_killed_between_two_policies_of_a_trial_resumes_without_losing_or_
         json.loads((cut / "summary.json").read_text())["cost"]
         == json.loads((whole / "summary.json").read_text())["cost"]
     )
+    assert publish([str(cut), "--repo_id=user/ab"]) == 0  # each policy's run as a normal published run
+    assert {name for _, name in hub.repos} == {"user/ab-1_oracle", "user/ab-2_oracle-noise_std-0.02"}
 
 
 def test_each_policy_agrees_trial_for_trial_with_its_own_separate_run(tmp_path):

@@ -16,7 +16,7 @@ from lerobot_contrast.evaluation import Evaluation
 from lerobot_contrast.operator_console import SessionStopped
 from lerobot_contrast.pairing.decide import PairMonitor
 from lerobot_contrast.pairing.interleave import Interleaver, Seat
-from lerobot_contrast.pairing.pair_dir import restaging_cost, write_index, write_summary
+from lerobot_contrast.pairing.pair_dir import is_pair_dir, restaging_cost, write_index, write_summary
 from lerobot_contrast.pairing.policies import PolicySpec, parse_policies
 from lerobot_contrast.record.plan_file import keep_plan
 from lerobot_contrast.record.results import write_results
@@ -56,6 +56,10 @@ def run_policies(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
         names = ", ".join(s.label for s in specs)
         print(f"each trial runs {len(specs)} times, once per policy ({names}), the scene restaged between them")
         return 0
+    if cfg.resume and not is_pair_dir(cfg.output_dir):  # e.g. one policy's run directory inside the session's
+        raise ConfigError(
+            f"--resume: {cfg.output_dir} holds no interleaved session (no pairs.json); resume the directory above it"
+        )
     if not cfg.resume and cfg.output_dir is not None and cfg.output_dir.is_dir() and any(cfg.output_dir.iterdir()):
         raise ConfigError(
             f"--output_dir: {cfg.output_dir} already exists; pass --resume=true or choose a new directory"

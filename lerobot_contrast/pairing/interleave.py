@@ -59,8 +59,8 @@ class Interleaver:
         self.ranks = base_ranks(plan)
         self.initial = initial
         self.before = initial  # the scene the next policy of the current trial is restaged from
-        self.order: list[str] = []
-        self.restage = False
+        self.order: list[str] = []  # the current trial's order, the running policy's position in it, and whether
+        self.position, self.restage = 0, False  # an earlier policy left the scene to be restaged
         for seat in self.seats:
             seat.state = LoopState.resume(seat.records, initial)
             ev = dataclasses.replace(seat.evaluation, execute=None)
