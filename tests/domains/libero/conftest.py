@@ -1,14 +1,15 @@
-"""One LIBERO simulator for the module (building a LIBERO scene takes tens of seconds on a CPU), at 128x128."""
+"""One LIBERO simulator for the package (building a LIBERO scene takes tens of seconds on a CPU), at 128x128."""
 
 from __future__ import annotations
 
 import pytest
 
-pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --libero")
+NEEDS = "LIBERO is installed by the test set-up: bash scripts/setup.sh --libero"
 
 
 @pytest.fixture(scope="package")
 def libero_robot():
+    pytest.importorskip("libero", reason=NEEDS)
     from lerobot_contrast.domains.libero.config_libero_sim import LiberoSimConfig
     from lerobot_contrast.domains.libero.libero_sim import LiberoSim
 
@@ -20,6 +21,7 @@ def libero_robot():
 
 @pytest.fixture(scope="package")
 def object_task():
+    pytest.importorskip("libero", reason=NEEDS)
     from lerobot_contrast.domains.libero.task import LiberoObjectTask
 
     return LiberoObjectTask(families=["task0"])
