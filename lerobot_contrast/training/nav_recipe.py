@@ -1,7 +1,9 @@
 """The `vln_navigator` recipe: teacher demonstrations, `lerobot-train`, then DAgger rounds, all resumable.
 
 Every phase leaves its result in `output_dir` and is skipped when it is already there, so a killed run started
-again with the same settings goes on where it stopped (`lerobot-train` resumes from its last checkpoint).
+again with the same settings goes on where it stopped: `lerobot-train` resumes from its last checkpoint, and each
+recording phase writes a dataset of its own, so one killed mid-way is recorded again from its start without
+touching the finished ones (training round k reads the demonstrations and rounds 0..k-1 aggregated).
 Demonstrations and DAgger roll-outs use training-split arrangements; the closed-loop check uses evaluation-split
 ones from a seed never used for training (`sampler`).
 """
@@ -9,13 +11,14 @@ ones from a seed never used for training (`sampler`).
 from __future__ import annotations
 
 import json
+import shutil
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from lerobot_contrast.domains.vln.sampler import sample_arrangements
+from lerobot_contrast.domains.vln.sampler import MAX_INSTANCES, sample_arrangements
 from lerobot_contrast.domains.vln.task import SUCCESS_RADIUS_M
 from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.training.episodes import record_episodes
@@ -46,6 +49,8 @@ class NavRecipe:
     eval_instances: int = 250
     eval_seed: int = 1_000_003
     device: str = "cpu"
+    # lerobot-train saves a checkpoint this often (steps), so a killed run loses at most this many.
+    save_every: int = 250
 
     def __post_init__(self) -> None:
         if len(self.steps) != len(self.betas) + 1:
@@ -53,10 +58,27 @@ class NavRecipe:
                 f"--recipe.steps has {len(self.steps)} entries for {len(self.betas)} DAgger rounds; "
                 "give one more than --recipe.betas (the first training run, then one per round)"
             )
+        for name in ("demos", "dagger_episodes", "eval_instances"):
+            if not 1 <= getattr(self, name) <= MAX_INSTANCES:
+                raise ValueError(
+                    f"--recipe.{name} must be 1 to {MAX_INSTANCES} arrangements, got {getattr(self, name)}"
+                )
+        if min(self.steps) < 1 or self.save_every < 1 or self.batch_size < 1:
+            raise ValueError("--recipe.steps, --recipe.batch_size and --recipe.save_every must be at least 1")
+        if any(not 0.0 <= beta <= 1.0 for beta in self.betas) or not 0.0 <= self.slip <= 1.0:
+            raise ValueError(
+                f"--recipe.betas and --recipe.slip are probabilities in [0, 1], got {self.betas}, {self.slip}"
+            )
 
-    @property
-    def dataset(self) -> Path:
-        return self.output_dir / "dataset"
+    def recorded(self, phase: str) -> Path:
+        """The dataset a recording phase (`demos`, `dagger_0`, ...) writes."""
+        return self.output_dir / "datasets" / phase
+
+    def training_data(self, round_index: int) -> Path:
+        """What training round `round_index` reads: the demonstrations, then with every earlier round's roll-outs."""
+        if round_index == 0:
+            return self.recorded("demos")
+        return self.output_dir / "datasets" / f"train_{round_index}"
 
     def train_dir(self, round_index: int) -> Path:
         return self.output_dir / f"train_{round_index}"
@@ -68,8 +90,10 @@ class NavRecipe:
         return self.model(len(self.betas))
 
 
-def _record(recipe: NavRecipe, actor, instances, label: str) -> None:
-    dataset = open_dataset(recipe.dataset, REPO_ID)
+def _record(recipe: NavRecipe, actor, instances, label: str, phase: str) -> None:
+    root = recipe.recorded(phase)
+    shutil.rmtree(root, ignore_errors=True)  # what a killed run left of this unfinished phase
+    dataset = open_dataset(root, REPO_ID)
     start = time.time()
     outcomes = record_episodes(dataset, NavSimulator(), instances, actor, recipe.max_steps)
     dataset.finalize()
@@ -97,10 +121,12 @@ def _phases(recipe: NavRecipe) -> dict[str, float]:
     if not progress.done("demos"):
         rng = np.random.default_rng(recipe.seed)
         instances = sample_arrangements(recipe.demos, "train", recipe.seed, SUCCESS_RADIUS_M)
-        _record(recipe, SlippingTeacher(recipe.slip, rng), instances, "demos")
+        _record(recipe, SlippingTeacher(recipe.slip, rng), instances, "demos", "demos")
         progress.finish("demos")
     for round_index in range(len(recipe.betas) + 1):
         if not progress.done(f"train_{round_index}"):
+            if round_index > 0 and not (recipe.train_dir(round_index) / "checkpoints").exists():
+                _aggregate(recipe, round_index)
             lerobot_train(recipe, round_index, "vln_navigator", REPO_ID)
             progress.finish(f"train_{round_index}")
         if round_index < len(recipe.betas) and not progress.done(f"dagger_{round_index}"):
@@ -108,9 +134,21 @@ def _phases(recipe: NavRecipe) -> dict[str, float]:
             base = recipe.seed * 1000 + round_index + 1  # a training stream of its own for each round
             instances = sample_arrangements(recipe.dagger_episodes, "train", base, SUCCESS_RADIUS_M)
             learner = NavLearner(recipe.model(round_index))
-            _record(recipe, NavMixture(learner, recipe.betas[round_index], rng), instances, f"dagger {round_index}")
+            mixture = NavMixture(learner, recipe.betas[round_index], rng)
+            _record(recipe, mixture, instances, f"dagger {round_index}", f"dagger_{round_index}")
             progress.finish(f"dagger_{round_index}")
     return evaluate(recipe, progress)
+
+
+def _aggregate(recipe: NavRecipe, round_index: int) -> None:
+    """Round `round_index`'s training set: the demonstrations and rounds 0..round_index-1, built afresh."""
+    from lerobot.datasets.aggregate import aggregate_datasets
+
+    phases = ["demos", *(f"dagger_{k}" for k in range(round_index))]
+    target = recipe.training_data(round_index)
+    shutil.rmtree(target, ignore_errors=True)
+    roots = [recipe.recorded(phase) for phase in phases]
+    aggregate_datasets([REPO_ID] * len(roots), REPO_ID, roots=roots, aggr_root=target)
 
 
 def evaluate(recipe: NavRecipe, progress: Progress, model: Path | None = None) -> dict[str, float]:

@@ -51,6 +51,8 @@ class Recipe:
     eval_seed: int = 1_000_003
     eval_max_steps: int = board.MAX_EPISODE_STEPS
     device: str = "cpu"
+    # lerobot-train saves a checkpoint this often (steps), so a killed run loses at most this many.
+    save_every: int = 1000
 
     def __post_init__(self) -> None:
         if len(self.steps) != len(self.betas) + 1:
@@ -62,6 +64,10 @@ class Recipe:
     @property
     def dataset(self) -> Path:
         return self.output_dir / "dataset"
+
+    def training_data(self, round_index: int) -> Path:
+        """What training round `round_index` reads (one dataset the rounds append to)."""
+        return self.dataset
 
     def train_dir(self, round_index: int) -> Path:
         return self.output_dir / f"train_{round_index}"
@@ -127,13 +133,13 @@ def lerobot_train(recipe: Any, round_index: int, policy_type: str, repo_id: str)
         policy = [f"--policy.type={policy_type}"] if round_index == 0 else [f"--policy.path={previous}"]
         args = [
             f"--dataset.repo_id={repo_id}",
-            f"--dataset.root={recipe.dataset}",
+            f"--dataset.root={recipe.training_data(round_index)}",
             *policy,
             "--policy.push_to_hub=false",
             f"--policy.device={recipe.device}",
             f"--steps={steps}",
             f"--batch_size={recipe.batch_size}",
-            f"--save_freq={max(1, min(1000, steps))}",
+            f"--save_freq={max(1, min(recipe.save_every, steps))}",
             f"--num_workers={recipe.num_workers}",
             f"--seed={recipe.seed + round_index}",
             f"--output_dir={out}",
