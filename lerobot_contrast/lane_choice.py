@@ -9,6 +9,7 @@ from contextlib import suppress
 from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.lane_seats import batches_lanes
 
 # Lanes `--lanes=auto` runs on our simulators: scripts/bench_lanes.py measures their speed and memory.
 AUTO_LANES = 8
@@ -33,7 +34,8 @@ def choose_lanes(
     value: str | int, robot: Any, policy: Any, *, operator: bool, fps: float | None, max_episode_s: float | None = None
 ) -> int:
     """The lanes to run: one on hardware, with an operator, at a fixed rate or with episodes limited in wall time
-    (lanes stretch each episode's wall time); with auto, AUTO_LANES."""
+    (lanes stretch each episode's wall time); with auto, AUTO_LANES for a policy that answers all lanes in one call
+    on one of our simulators, else one."""
     requested = parse_lanes(value)
     why = (
         "an operator stages it" if operator
@@ -48,7 +50,7 @@ def choose_lanes(
         return 1
     if requested is not None:
         return requested
-    return AUTO_LANES if _ours(robot) else 1
+    return AUTO_LANES if _ours(robot) and batches_lanes(policy) else 1  # copies per lane would only add steps
 
 
 def _ours(robot: Any) -> bool:

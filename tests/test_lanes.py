@@ -188,5 +188,6 @@ def test_the_learned_default_answers_every_lane_in_one_call_and_auto_runs_lanes_
         plugin = LostTabletop(robot.config)  # another package's subclass: its copies may share a link
         assert choose_lanes("auto", plugin, learned, operator=False, fps=None) == 1
         assert choose_lanes("3", plugin, learned, operator=False, fps=None) == 3
+        assert choose_lanes("auto", robot, oracle, operator=False, fps=None) == 1  # a copy per lane gains nothing
     finally:
         robot.disconnect()

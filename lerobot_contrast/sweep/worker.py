@@ -84,7 +84,8 @@ def _run(cfg: EvalConfig) -> int:
     connect(robot)
     try:
         policy = _policy(cfg, robot, planned.task)
-        evaluation = dataclasses.replace(equipped(cfg, planned, robot, policy, None), verbose=False)
+        # The cell runs lanes (--lanes, auto by default), answered from one thread: cells are the sweep's parallelism.
+        evaluation = dataclasses.replace(equipped(cfg, planned, robot, policy, None), verbose=False, lane_threads=1)
         return len(run(evaluation).records)
     finally:
         if robot.is_connected:
