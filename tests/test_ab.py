@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from lerobot_contrast import interleaved_run as command
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.eval import main
-from lerobot_contrast.pairing import command
 from lerobot_contrast.publish import main as publish
 from lerobot_contrast.report import main as report
 from lerobot_contrast.review import main as review

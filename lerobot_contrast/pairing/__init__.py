@@ -1,2 +1,2 @@
-"""Interleaved comparisons (`--policies=A,B[,C]`): every planned trial run by each policy in turn from the same staged
-scene, one normal run directory per policy inside one pair directory, decided pair by pair as the bases close."""
+"""Interleaved comparisons' records (`--policies=A,B[,C]`): the pair directory, the per-pair sequential decisions, the
+combined comparison and publishing. The session itself runs in `interleaved_run.py`, beside the single-policy loop."""

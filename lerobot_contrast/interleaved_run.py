@@ -13,16 +13,19 @@ from lerobot_contrast.build import choose_robot, make_operator, make_robot, need
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json
 from lerobot_contrast.contrast.trial import TrialRecord
 from lerobot_contrast.evaluation import Evaluation
+from lerobot_contrast.interleave import Interleaver, Seat
+from lerobot_contrast.lane_choice import use_threads
 from lerobot_contrast.operator_console import SessionStopped
 from lerobot_contrast.pairing.decide import PairMonitor
-from lerobot_contrast.pairing.interleave import Interleaver, Seat
 from lerobot_contrast.pairing.pair_dir import is_pair_dir, restaging_cost, write_index, write_summary
-from lerobot_contrast.pairing.policies import PolicySpec, parse_policies
+from lerobot_contrast.policies import make_policy
+from lerobot_contrast.policy_list import PolicySpec, parse_policies
 from lerobot_contrast.record.plan_file import keep_plan
 from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import RunDir, disk_full_said, open_run_dir, write_json_atomic
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.record.third_party import third_party_output
+from lerobot_contrast.run_setup import connect, default_output_dir, dry_run, equipped, planned_evaluation, validate
 from lerobot_contrast.runner import RobotLostError, RobotRunner
 
 
@@ -45,14 +48,12 @@ def policy_cfg(cfg: EvalConfig, spec: PolicySpec, path: Path | None) -> EvalConf
 
 def run_policies(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
     """Plan once, then run every policy on it interleaved (or print the plan with --dry_run); the exit code."""
-    from lerobot_contrast import eval as single  # the single-policy command's parts, used as they are
-
     specs = check_pair_flags(cfg)
     for spec in specs:
-        single.validate(policy_cfg(cfg, spec, None))
-    planned = single.planned_evaluation(cfg)
+        validate(policy_cfg(cfg, spec, None))
+    planned = planned_evaluation(cfg)
     if cfg.dry_run:
-        single.dry_run(planned)
+        dry_run(planned)
         names = ", ".join(s.label for s in specs)
         print(f"each trial runs {len(specs)} times, once per policy ({names}), the scene restaged between them")
         return 0
@@ -69,15 +70,15 @@ def run_policies(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
         choose_robot(probe)
         cfg.robot = probe.robot
     robot = make_robot(cfg, chosen_robot)
-    single.connect(robot)
+    connect(robot)
     try:
         operator = make_operator(cfg, robot, planned.task, planned.cost_model.unit)
-        single.use_threads()
-        policies = [single.make_policy(s.args, robot, planned.task, cfg.rename_map) for s in specs]
-        cfg.output_dir = cfg.output_dir or single.default_output_dir(cfg, planned.task)
+        use_threads()
+        policies = [make_policy(s.args, robot, planned.task, cfg.rename_map) for s in specs]
+        cfg.output_dir = cfg.output_dir or default_output_dir(cfg, planned.task)
         evaluations = [
             dataclasses.replace(
-                single.equipped(policy_cfg(cfg, s, cfg.output_dir), planned, robot, p, operator),
+                equipped(policy_cfg(cfg, s, cfg.output_dir), planned, robot, p, operator),
                 lanes=1, stop=None, verbose=False, labels={"strategy": cfg.strategy, "policy": s.label},
             )
             for s, p in zip(specs, policies, strict=True)
@@ -136,7 +137,7 @@ class Session:
         return run_dir
 
     def _seat(self, spec: PolicySpec, ev: Evaluation, run_dir: RunDir) -> Seat:
-        from lerobot_contrast.pairing.console import PairConsole
+        from lerobot_contrast.pair_console import PairConsole
 
         operator = None if ev.operator is None else PairConsole(ev.operator, spec.label, self.cfg.blind)
         runner = RobotRunner(
