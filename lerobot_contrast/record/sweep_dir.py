@@ -71,7 +71,8 @@ def write_sweep_results(path: Path, cells: Sequence[Mapping[str, Any]]) -> Path:
         trials = read_results(results).to_pandas()
         columns = {"cell": cell["name"], "cell_status": cell.get("status"), **_columns(cell["settings"])}
         for position, (name, value) in enumerate(columns.items()):
-            trials.insert(position, name, [value] * len(trials))
+            # A setting named like a trial column (`cost: reset_time` beside each trial's cost) keeps both.
+            trials.insert(position, f"cell_{name}" if name in trials else name, [value] * len(trials))
         frames.append(trials)
     table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=list(CELL_COLUMNS))
     tmp = path / (RESULTS + ".tmp")
