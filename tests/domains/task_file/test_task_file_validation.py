@@ -241,7 +241,10 @@ def test_errors_from_python_data_name_the_key_without_a_line():
 @pytest.mark.parametrize(
     ("name", "message"),
     [
-        ("nope", "--task: unknown task 'nope'; choose from: language_table, vln, vln_paper, lekiwi_fetch, so101_blocks"),
+        (
+            "nope",
+            "--task: unknown task 'nope'; choose from: language_table, libero_10, libero_goal, libero_object, libero_spatial, vln, vln_paper, lekiwi_fetch, so101_blocks",
+        ),
         ("missing/task.yaml", "--task: no task file at missing/task.yaml"),
     ],
 )

@@ -73,7 +73,10 @@ def test_the_paper_arrangements_stay_available_by_name():
 @pytest.mark.parametrize(
     ("flags", "message"),
     [
-        (["--task=vln_nowhere"], "choose from: language_table, vln, vln_paper"),
+        (
+            ["--task=vln_nowhere"],
+            "choose from: language_table, libero_10, libero_goal, libero_object, libero_spatial, vln, vln_paper",
+        ),
         (["--task=vln", f"--n_instances={sampler.MAX_INSTANCES + 1}"], f"1 to {sampler.MAX_INSTANCES} instances"),
     ],
 )
