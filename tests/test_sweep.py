@@ -79,7 +79,9 @@ def running_cells() -> dict[str, int]:
     return found
 
 
-def wait_for(condition, timeout: float = 60.0) -> None:
+# How long to wait for a sweep to get going: Ray starting its workers and each cell importing LeRobot and torch, on a
+# 2-core CI machine whose other core runs the rest of the suite (60 s was once too short there). Not a speed promise.
+def wait_for(condition, timeout: float = 180.0) -> None:
     end = time.monotonic() + timeout
     while not condition():
         assert time.monotonic() < end, "timed out"
