@@ -3,7 +3,11 @@ trial for trial (up to wall-clock fields). Figures last: trials=... wall_1lane_s
 identical=true|false.
 
     .venv/bin/python scripts/bench_lanes.py                      # the default evaluation (the README's first command)
-    .venv/bin/python scripts/bench_lanes.py --n_instances=10 --lanes=4 --busy   # beside a process that keeps a core busy
+    .venv/bin/python scripts/bench_lanes.py --n_instances=10 --busy   # the lanes alone, then beside busy processes
+
+With --busy the figures are the lanes' run alone and beside processes that keep cores busy: its share of a core
+(CPU-s per wall-s), its throughput (trials per wall-s) and CPU-s per trial in each, and `proportional`, the ratio
+of throughputs over the ratio of shares (1.0: it slows exactly in proportion to the share it gets).
 """
 
 from __future__ import annotations
@@ -77,11 +81,43 @@ def spin(stop: float) -> None:
         pass
 
 
+def busy_runs(flags: list[str], lanes: str, spinners: int, tmp: Path) -> str:
+    """The lanes' evaluation alone and beside `spinners` processes that keep a core busy each, as name=value pairs."""
+    alone = timed_run([*flags, f"--lanes={lanes}"], tmp / "alone")
+    context = multiprocessing.get_context("spawn")
+    busy = [context.Process(target=spin, args=(time.time() + 24 * 3600,)) for _ in range(spinners)]
+    for process in busy:
+        process.start()
+    try:
+        beside = timed_run([*flags, f"--lanes={lanes}"], tmp / "busy")
+    finally:
+        for process in busy:
+            process.terminate()
+    trials = len(journal(tmp / "alone"))
+    identical = journal(tmp / "alone") == journal(tmp / "busy")
+    share = [cpu / wall for wall, cpu in (alone, beside)]
+    throughput = [trials / wall for wall, _ in (alone, beside)]
+    return (
+        f"trials={trials} lanes={lanes} spinners={spinners} wall_alone_s={alone[0]:.1f} wall_busy_s={beside[0]:.1f} "
+        f"share_alone={share[0]:.2f} share_busy={share[1]:.2f} cpu_per_trial_alone_s={alone[1] / trials:.3f} "
+        f"cpu_per_trial_busy_s={beside[1] / trials:.3f} throughput_ratio={throughput[1] / throughput[0]:.2f} "
+        f"share_ratio={share[1] / share[0]:.2f} proportional={throughput[1] / throughput[0] / (share[1] / share[0]):.2f} "
+        f"identical={str(identical).lower()}"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--lanes", default="8", help="lanes of the second run (default: 8)")
     parser.add_argument("--n_instances", type=int, default=None, help="default: the task's own (the default eval)")
-    parser.add_argument("--busy", action="store_true", help="keep one core busy with another process meanwhile")
+    parser.add_argument(
+        "--busy",
+        type=int,
+        nargs="?",
+        const=1,
+        default=0,
+        help="instead: the lanes alone, then beside this many processes that keep a core busy each (default 1)",
+    )
     parser.add_argument("--feature_sets", action="store_true", help="instead: compare runs under CPU feature sets")
     args, flags = parser.parse_known_args()
     flags = [*flags, *([f"--n_instances={args.n_instances}"] if args.n_instances else [])]
@@ -93,23 +129,18 @@ def main() -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         warm([*flags, "--n_instances=1", "--max_episode_steps=2", f"--output_dir={tmp}/warm"])
-        busy = None
         if args.busy:
-            busy = multiprocessing.get_context("spawn").Process(target=spin, args=(time.time() + 24 * 3600,))
-            busy.start()
-        try:
-            one = timed_run([*flags, "--lanes=1"], Path(tmp) / "one")
-            many = timed_run([*flags, f"--lanes={args.lanes}"], Path(tmp) / "many")
-        finally:
-            if busy is not None:
-                busy.terminate()
+            print(busy_runs(flags, args.lanes, args.busy, Path(tmp)))
+            return
+        one = timed_run([*flags, "--lanes=1"], Path(tmp) / "one")
+        many = timed_run([*flags, f"--lanes={args.lanes}"], Path(tmp) / "many")
         a, b = journal(Path(tmp) / "one"), journal(Path(tmp) / "many")
     differing = next((i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y), None)
     if differing is not None:
         print(f"first differing trial: {differing}\n  1 lane: {a[differing]}\n  lanes:  {b[differing]}")
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(
-        f"trials={len(a)} lanes={args.lanes} busy={str(args.busy).lower()} cpu_1lane_s={one[1]:.1f} "
+        f"trials={len(a)} lanes={args.lanes} cpu_1lane_s={one[1]:.1f} "
         f"cpu_lanes_s={many[1]:.1f} cpu_speedup={one[1] / many[1]:.2f} peak_rss_mb={rss_mb:.0f} "
         f"wall_1lane_s={one[0]:.1f} wall_lanes_s={many[0]:.1f} speedup={one[0] / many[0]:.2f} "
         f"identical={str(a == b).lower()}"

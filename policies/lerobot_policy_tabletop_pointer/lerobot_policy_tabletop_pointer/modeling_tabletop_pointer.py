@@ -156,6 +156,8 @@ class TabletopPointerPolicy(PreTrainedPolicy):
             if "text" not in memory:
                 memory["text"] = self.instruction(self.tokenizer([task], batch[STATE_KEY].device))
         tensors = {key: value for key, value in batch.items() if isinstance(value, Tensor)}
+        # Resized before the rows are padded (each row is resized on its own), so padding costs no resizing.
+        tensors[IMAGE_KEY] = resize_image(tensors[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
         # On a GPU the kernels are chosen by batch size, so every call runs on the same number of rows there.
         low, high = LANE_ROWS if batch[STATE_KEY].device.type == "cpu" else (LANE_ROWS[1], LANE_ROWS[1])
         actions = []
@@ -166,8 +168,7 @@ class TabletopPointerPolicy(PreTrainedPolicy):
 
     def _lane_chunk(self, batch: dict[str, Tensor], memories: list[dict[str, Tensor]], low: int) -> Tensor:
         rows = len(memories)
-        image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
-        logits, presence = self.heatmaps(image)
+        logits, presence = self.heatmaps(batch[IMAGE_KEY])
         text = {key: _pad_rows(torch.cat([m["text"][key] for m in memories]), low) for key in memories[0]["text"]}
         positions = apply_homography(self.image_to_board, soft_argmax(logits))
         seen = {"logits": logits, "presence": presence, "positions": positions, **text}
