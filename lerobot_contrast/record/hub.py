@@ -6,6 +6,7 @@ same files. Rate limits and unavailable servers are retried with backoff; the to
 from __future__ import annotations
 
 import logging
+import os
 import re
 import time
 from collections.abc import Callable
@@ -32,6 +33,9 @@ OPTIONAL = ("journal.jsonl", "plan.json")
 RUN_PATTERNS = ["README.md", *REQUIRED, *OPTIONAL, "report/*"]
 RETRY_STATUS = (429, 502, 503, 504)
 MAX_WAIT_S = 60.0
+# The first wait before retrying (it doubles per try); a setting for slow links, or tests that must not wait.
+BACKOFF_ENV = "LEROBOT_CONTRAST_HUB_BACKOFF_S"
+DEFAULT_BACKOFF_S = 1.0
 REPO_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*/[A-Za-z0-9][A-Za-z0-9._-]*")
 TOKEN_LIKE = re.compile(r"hf_[A-Za-z0-9]{8,}")
 
@@ -85,7 +89,24 @@ def _scrub(text: str, token: str | None) -> str:
     return TOKEN_LIKE.sub("hf_***", text)
 
 
-def _with_retries[T](call: Callable[[], T], what: str, api: HfApi, repo_id: str, attempts: int, backoff_s: float) -> T:
+def backoff_from_env() -> float:
+    """The first retry wait: LEROBOT_CONTRAST_HUB_BACKOFF_S seconds when set, else 1 s."""
+    value = os.environ.get(BACKOFF_ENV)
+    if value is None:
+        return DEFAULT_BACKOFF_S
+    try:
+        seconds = float(value)
+    except ValueError:
+        seconds = -1.0
+    if not 0 <= seconds <= MAX_WAIT_S:
+        raise HubError(f"{BACKOFF_ENV}={value!r}: give the first retry wait in seconds, from 0 to {MAX_WAIT_S:g}")
+    return seconds
+
+
+def _with_retries[T](
+    call: Callable[[], T], what: str, api: HfApi, repo_id: str, attempts: int, backoff_s: float | None
+) -> T:
+    backoff_s = backoff_from_env() if backoff_s is None else backoff_s
     for attempt in range(1, attempts + 1):
         try:
             with quiet_hub_client():
@@ -146,9 +167,10 @@ def publish_run(
     endpoint: str | None = None,
     commit_message: str | None = None,
     attempts: int = 5,
-    backoff_s: float = 1.0,
+    backoff_s: float | None = None,
 ) -> str:
-    """Upload `run_dir` as the dataset repo `repo_id` in one commit; returns the commit URL.
+    """Upload `run_dir` as the dataset repo `repo_id` in one commit; returns the commit URL. Without `backoff_s`, the
+    first retry waits LEROBOT_CONTRAST_HUB_BACKOFF_S seconds (default 1).
 
     Files in the repo that the run no longer has are deleted in the same commit, so publishing twice
     leaves the repo exactly as publishing once."""
@@ -173,7 +195,7 @@ def _publish(
     endpoint: str | None,
     commit_message: str | None,
     attempts: int,
-    backoff_s: float,
+    backoff_s: float | None,
 ) -> str:
     files = run_files(run_dir)
     api = HfApi(endpoint=endpoint, token=token)
@@ -207,7 +229,7 @@ def download_run(
     token: str | None = None,
     endpoint: str | None = None,
     attempts: int = 5,
-    backoff_s: float = 1.0,
+    backoff_s: float | None = None,
 ) -> Path:
     """Download a published run; returns its directory. Without `episodes` only the results, summary, config,
     journal, plan and report come (what `report` and `eval --plan` read), not the Rerun files or the dataset."""

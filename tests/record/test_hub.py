@@ -7,6 +7,7 @@ import shutil
 import socket
 import subprocess
 import sys
+import types
 
 import datasets
 import huggingface_hub
@@ -15,6 +16,7 @@ import pytest
 from lerobot.datasets import LeRobotDataset
 
 from lerobot_contrast import publish
+from lerobot_contrast.record import hub as hub_module
 from lerobot_contrast.record.hub import HubAuthError, HubError, download_run, publish_run, resolve_run, run_files
 from lerobot_contrast.record.run_lock import RunLock, RunLockedError
 
@@ -190,14 +192,55 @@ def unreachable_hub_env(tmp_path) -> dict[str, str]:
     }
 
 
-@pytest.mark.slow
+# Runs eval's main with huggingface_hub's waits between its own retries recorded instead of slept (test-side only: the
+# client's backoff has no setting); the retries are written to a file, one wait a line, as the process exits.
+NO_CLIENT_WAITS = """
+import atexit, sys, types
+from pathlib import Path
+import huggingface_hub.utils._http as client_http
+from lerobot_contrast.eval import main
+
+waits = []
+client_http.time = types.SimpleNamespace(sleep=waits.append)
+atexit.register(lambda: Path(sys.argv[1]).write_text("".join(f"{wait}\\n" for wait in waits)))
+sys.exit(main(sys.argv[2:]))
+"""
+
+
 def test_an_unreachable_hub_is_our_one_line_without_the_clients_warnings_or_retries(run, tmp_path):
-    env = unreachable_hub_env(tmp_path)
+    env = {**unreachable_hub_env(tmp_path), "LEROBOT_CONTRAST_HUB_BACKOFF_S": "0.01"}  # our retries, without the wait
     publishing = [sys.executable, "-m", "lerobot_contrast.publish", str(run), "--repo_id=someone/nothing"]
-    loading = [sys.executable, "-m", "lerobot_contrast.eval", "--policy.path=someone/nothing", "--n_instances=1"]
+    waits = tmp_path / "client_waits"
+    loading = [sys.executable, "-c", NO_CLIENT_WAITS, str(waits), "--policy.path=someone/nothing", "--n_instances=1"]
     loading.append(f"--output_dir={tmp_path / 'never'}")
-    for command, said in ((publishing, "error: cannot reach the Hub at "), (loading, "error: --policy.path: cannot ")):
+    for command, said in (
+        (publishing, "error: cannot reach the Hub at "),
+        (loading, "error: --policy.path: cannot load a LeRobot policy config from 'someone/nothing' "),
+    ):
         result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
         assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr[-3000:]
         assert result.stderr.startswith(said), result.stderr
+        if command is publishing:  # every try was made before giving up
+            assert "(ConnectError, 5 tries) to create the repo" in result.stderr
+    assert len(waits.read_text().splitlines()) >= 5  # the client retried too, and none of its lines reached the user
     assert not (tmp_path / "never").exists()
+
+
+@pytest.mark.parametrize("value", ["soon", "-1", "61"])
+def test_a_bad_backoff_setting_is_one_line_naming_it(monkeypatch, tmp_path, value):
+    monkeypatch.setenv("LEROBOT_CONTRAST_HUB_BACKOFF_S", value)
+    with pytest.raises(HubError, match=rf"^LEROBOT_CONTRAST_HUB_BACKOFF_S='{value}': give the first retry wait in "):
+        download_run("someone/nothing", tmp_path / "never", endpoint="http://127.0.0.1:9")
+
+
+def test_the_backoff_setting_sets_the_waits_between_retries(hub, run, monkeypatch):
+    waits = []
+    monkeypatch.setattr(hub_module, "time", types.SimpleNamespace(sleep=waits.append))
+    monkeypatch.setenv("LEROBOT_CONTRAST_HUB_BACKOFF_S", "0.25")
+    hub.fail("POST", r"/commit/main$", 503, times=2)
+    publish_run(run, REPO, endpoint=hub.endpoint)
+    assert waits == [0.25, 0.5] and len(hub.repo(REPO).commits) == 2
+    monkeypatch.delenv("LEROBOT_CONTRAST_HUB_BACKOFF_S")
+    hub.fail("POST", r"/commit/main$", 503)
+    publish_run(run, REPO + "-again", endpoint=hub.endpoint)
+    assert waits[2:] == [1.0]  # unset: the first wait is a second
