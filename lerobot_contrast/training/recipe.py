@@ -24,7 +24,7 @@ from lerobot_contrast.domains.language_table import board
 from lerobot_contrast.domains.language_table.task import LanguageTableTask
 from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.training.episodes import NoisyOracle, Simulator, open_dataset, record_episodes
-from lerobot_contrast.training.learner import Learner, Mixture, closed_loop
+from lerobot_contrast.training.learner import LANES, Learner, Mixture, closed_loop
 
 REPO_ID = "local/tabletop_pointer_demos"
 
@@ -51,6 +51,8 @@ class Recipe:
     eval_seed: int = 1_000_003
     eval_max_steps: int = board.MAX_EPISODE_STEPS
     device: str = "cpu"
+    # DAgger roll-outs and the closed-loop check run this many episodes side by side, with the results of one.
+    lanes: int = LANES
     # lerobot-train saves a checkpoint this often (steps), so a killed run loses at most this many.
     save_every: int = 1000
 
@@ -110,7 +112,7 @@ def _record(recipe: Recipe, actor, instances, label: str) -> None:
     dataset = open_dataset(recipe.dataset, REPO_ID)
     simulator = Simulator(LanguageTableTask())
     start = time.time()
-    outcomes = record_episodes(dataset, simulator, instances, actor, recipe.max_steps)
+    outcomes = record_episodes(dataset, simulator, instances, actor, recipe.max_steps, recipe.lanes)
     dataset.finalize()
     wins = sum(o.success for o in outcomes)
     print(
@@ -195,7 +197,7 @@ def _phases(recipe: Recipe) -> dict[str, float]:
 def evaluate(recipe: Recipe, progress: Progress) -> dict[str, float]:
     learner = Learner(recipe.final_model())
     instances = LanguageTableTask().sample(recipe.eval_instances, np.random.default_rng(recipe.eval_seed))
-    figures = closed_loop(learner, Simulator(LanguageTableTask()), instances, recipe.eval_max_steps)
+    figures = closed_loop(learner, Simulator(LanguageTableTask()), instances, recipe.eval_max_steps, recipe.lanes)
     figures["train_cpu_s"] = progress.state["cpu_s"]
     figures["rounds"] = len(recipe.betas)
     figures["weights_mb"] = sum(p.stat().st_size for p in _shipped_files(recipe.final_model())) / 1e6
@@ -215,12 +217,12 @@ def select_action_ms(learner: Learner, instance) -> float:
         simulator.physics.set_state(
             {n: (p.x, p.y, p.yaw) for n, p in instance.scene.objects.items()}, (robot.x, robot.y)
         )
-        observation = simulator.observation()
-        learner.reset(instance)
+        batch = learner.batch([simulator.observation()], [instance.instruction])
+        learner.policy.reset()
         times = []
         for _ in range(50):
             start = time.perf_counter()
-            learner.act(observation)
+            learner.policy.select_action(batch)
             times.append(time.perf_counter() - start)
         return float(np.median(times) * 1000)
     finally:

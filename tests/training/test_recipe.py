@@ -28,6 +28,48 @@ def test_demonstration_labels_are_the_noise_free_oracle_even_when_noise_is_execu
     assert noisy[0]["task"] == instance.instruction
 
 
+class FrameList:
+    """A dataset's writing calls, kept in a list of episodes."""
+
+    def __init__(self) -> None:
+        self.episodes, self.pending = [], []
+
+    def add_frame(self, frame: dict) -> None:
+        self.pending.append(frame)
+
+    def has_pending_frames(self) -> bool:
+        return bool(self.pending)
+
+    def save_episode(self) -> None:
+        self.episodes.append(self.pending)
+        self.pending = []
+
+
+@pytest.mark.slow
+def test_dagger_rollouts_and_closed_loop_checks_in_lanes_match_one_lane():
+    from lerobot_policy_tabletop_pointer import WEIGHTS
+
+    from lerobot_contrast.training.episodes import record_episodes
+    from lerobot_contrast.training.learner import Learner, Mixture, closed_loop
+
+    task, learner = LanguageTableTask(), Learner(WEIGHTS)
+    instances = task.sample(4, np.random.default_rng(3))
+    recorded = {}
+    for lanes in (1, 3):
+        frames = FrameList()
+        actor = Mixture(learner, 0.5, np.random.default_rng(7))
+        outcomes = record_episodes(frames, Simulator(task), instances, actor, 8, lanes)
+        recorded[lanes] = (outcomes, frames.episodes)
+    (one, one_frames), (three, three_frames) = recorded[1], recorded[3]
+    assert one == three and len(one_frames) == len(three_frames) > 1
+    for a, b in zip(one_frames, three_frames, strict=True):
+        assert [f["task"] for f in a] == [f["task"] for f in b]
+        np.testing.assert_array_equal([f["observation.state"] for f in a], [f["observation.state"] for f in b])
+        np.testing.assert_array_equal([f["action"] for f in a], [f["action"] for f in b])
+    checks = [closed_loop(learner, Simulator(task), instances, 10, lanes) for lanes in (1, 4)]
+    assert checks[0] == checks[1] and set(checks[0]) > {"success"}
+
+
 @pytest.mark.slow
 def test_smoke_recipe_trains_with_lerobot_and_resumes_without_redoing_work(tmp_path):
     recipe = Recipe(
