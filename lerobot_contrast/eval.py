@@ -27,7 +27,6 @@ from lerobot_contrast.flags import (
     wants_help,
 )
 from lerobot_contrast.lane_choice import use_threads
-from lerobot_contrast.operator_console import SessionStopped
 from lerobot_contrast.policies import make_policy
 from lerobot_contrast.progress import RunProgress, header_lines
 from lerobot_contrast.record.journal import read_journal
@@ -74,7 +73,7 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
 
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     from lerobot_contrast.evaluation import run
-    from lerobot_contrast.runner import RobotLostError
+    from lerobot_contrast.run_end import ENDED_EARLY, say_ended_early
 
     path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
     resume = f"--output_dir={path} --resume=true"
@@ -87,18 +86,8 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     try:
         with progress:
             results = run(dataclasses.replace(evaluation, progress=progress))
-    except KeyboardInterrupt:
-        print(
-            f"\ninterrupted: every finished trial is in {path / 'journal.jsonl'}; continue with {resume}",
-            file=sys.stderr,
-        )
-        return 130
-    except SessionStopped as stop:
-        print(f"stopped: {stop}; {len(read_journal(path / 'journal.jsonl'))} trials recorded; continue with {resume}")
-        return 0
-    except RobotLostError as error:
-        print(f"error: {error} with {resume}", file=sys.stderr)
-        return 2
+    except ENDED_EARLY as error:
+        return say_ended_early(error, resume, f"in {journal}", recorded=lambda: len(read_journal(journal)))
     from lerobot_contrast.reporting.run_table import results_table  # pandas and scipy, needed only now
 
     print(results_table(results.records, results.summary, unit))

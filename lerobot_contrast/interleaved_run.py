@@ -4,7 +4,6 @@ them interleaved into one pair directory (or resume it), decide the pairs as bas
 from __future__ import annotations
 
 import dataclasses
-import sys
 from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
@@ -15,7 +14,6 @@ from lerobot_contrast.contrast.trial import TrialRecord
 from lerobot_contrast.evaluation import Evaluation
 from lerobot_contrast.interleave import Interleaver, Seat
 from lerobot_contrast.lane_choice import use_threads
-from lerobot_contrast.operator_console import SessionStopped
 from lerobot_contrast.pairing.decide import PairMonitor
 from lerobot_contrast.pairing.pair_dir import is_pair_dir, restaging_cost, write_index, write_summary
 from lerobot_contrast.policies import make_policy
@@ -25,8 +23,9 @@ from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import RunDir, disk_full_said, open_run_dir, write_json_atomic
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.record.third_party import third_party_output
+from lerobot_contrast.run_end import ENDED_EARLY, say_ended_early
 from lerobot_contrast.run_setup import connect, default_output_dir, dry_run, equipped, planned_evaluation, validate
-from lerobot_contrast.runner import RobotLostError, RobotRunner
+from lerobot_contrast.runner import RobotRunner
 
 
 def check_pair_flags(cfg: EvalConfig) -> list[PolicySpec]:
@@ -105,17 +104,8 @@ class Session:
         try:
             with disk_full_said(self.path, f"resume with {self.resume_hint}"):
                 monitor, records, reason = self.run()
-        except KeyboardInterrupt:
-            print(
-                f"\ninterrupted: every finished trial is journalled; continue with {self.resume_hint}", file=sys.stderr
-            )
-            return 130
-        except SessionStopped as stop:
-            print(f"stopped: {stop}; continue with {self.resume_hint}")
-            return 0
-        except RobotLostError as error:
-            print(f"error: {error} with {self.resume_hint}", file=sys.stderr)
-            return 2
+        except ENDED_EARLY as error:
+            return say_ended_early(error, self.resume_hint, "journalled")
         self.print_end(monitor, records, reason)
         return 0
 
