@@ -1,5 +1,6 @@
 """`python -m lerobot_contrast.calibrate`: find the printed ArUco board lying on the table in each camera's view and
-store the table-to-pixel homography beside the task (<task>.calibration.json), for staging overlays and checks.
+store the table-to-pixel homography (<task>.calibration.json: beside your task file, or for a shipped example in
+LeRobot's calibration folder under tables/), where eval's staging finds it, for staging overlays and checks.
 
 `--write_board=board.pdf` writes the board to print (its printed size is stated on it and here).
 """
@@ -45,7 +46,8 @@ class CalibrateConfig:
     camera: str = "top"
     # Where the board's centre lies on the table: --board.x=0.30 --board.y=0 (metres) --board.yaw_deg=0.
     board: BoardArgs = field(default_factory=BoardArgs)
-    # The calibration file to write (default: beside the task file, <task>.calibration.json).
+    # The calibration file to write (default: <task>.calibration.json beside your task file; for a shipped example,
+    # tables/<task>.calibration.json in LeRobot's calibration folder, $HF_LEROBOT_CALIBRATION). eval finds either.
     output: Path | None = None
     # Refuse a fit whose RMS reprojection error is above this many pixels.
     max_error_px: float = 2.0
@@ -105,14 +107,18 @@ def calibrate(cfg: CalibrateConfig, images: dict[str, np.ndarray]) -> Path:
             failed.append(str(error))
     if not fitted:
         raise CalibrationError("; ".join(failed))
-    save(output, fitted, cfg.board)
+    try:
+        save(output, fitted, cfg.board)
+    except OSError as error:
+        raise UserError(f"cannot write {output} ({error.strerror}); name another file with --output=PATH") from None
     for calibration in fitted:
         print(
             f"camera {calibration.camera}: {calibration.markers} markers, reprojection error {calibration.error_px:.2f} px"
         )
     for line in failed:
         print(f"skipped: {line}")
-    print(f"wrote {output}")
+    found = "" if cfg.output is not None else f"; eval --task={cfg.task} finds it there"
+    print(f"wrote {output}{found}")
     return output
 
 

@@ -3,15 +3,19 @@ rendered lying on its table is found, and the fitted homography matches the simu
 
 import json
 import shutil
+import types
 
 import cv2
 import numpy as np
 import pytest
+from lerobot.utils import constants
 
 from lerobot_contrast.calibrate import main
 from lerobot_contrast.domains.language_table.render import TabletopRenderer
-from lerobot_contrast.domains.task_file.loader import examples_dir
+from lerobot_contrast.domains.task_file.loader import examples_dir, load_task_file
 from lerobot_contrast.staging import board, homography
+from lerobot_contrast.staging.args import StagingArgs
+from lerobot_contrast.staging.setup import default_calibration, make_bench
 from tests.staging.sim_camera import WHERE, board_frame, sim_pixels
 
 # The so101_blocks workspace (metres), where staging needs the homography to hold.
@@ -46,6 +50,37 @@ def test_the_command_writes_the_calibration_beside_the_task_file(renderer, tmp_p
     assert stored["board"]["printed"] == board.printed_size_text()
     loaded = homography.load(tmp_path / "my_table.calibration.json")["top"]
     assert np.abs(loaded.to_pixels(WORKSPACE) - sim_pixels(renderer, WORKSPACE)).max() < 1.0
+
+
+def test_a_shipped_examples_calibration_goes_to_the_users_folder_where_evals_staging_finds_it(
+    renderer, tmp_path, monkeypatch, capsys
+):
+    monkeypatch.setattr(constants, "HF_LEROBOT_CALIBRATION", tmp_path / "calibration")
+    shipped = sorted(examples_dir().iterdir())
+    frame = tmp_path / "frame.png"
+    cv2.imwrite(str(frame), cv2.cvtColor(board_frame(renderer), cv2.COLOR_RGB2BGR))
+    assert main(["--task=so101_blocks", f"--image={frame}", *BOARD_FLAGS]) == 0
+    written = tmp_path / "calibration" / "tables" / "so101_blocks.calibration.json"
+    assert capsys.readouterr().out.splitlines()[-1] == f"wrote {written}; eval --task=so101_blocks finds it there"
+    assert sorted(examples_dir().iterdir()) == shipped  # nothing written into the installed package
+    assert default_calibration(str(examples_dir() / "so101_blocks.yaml")) == written  # named by its path too
+    robot = types.SimpleNamespace(observation_features={"top": (480, 640, 3)})
+    task = load_task_file("so101_blocks")
+    bench = make_bench(StagingArgs(viewer="none"), "so101_blocks", task, robot, "measured", lambda: None)
+    expected = homography.load(written)["top"]
+    assert np.allclose(bench.calibration.to_pixels(WORKSPACE), expected.to_pixels(WORKSPACE))
+
+
+def test_a_calibration_that_cannot_be_written_is_one_line(renderer, tmp_path, monkeypatch, capsys):
+    (tmp_path / "a_file").write_text("")
+    monkeypatch.setattr(constants, "HF_LEROBOT_CALIBRATION", tmp_path / "a_file" / "calibration")
+    frame = tmp_path / "frame.png"
+    cv2.imwrite(str(frame), cv2.cvtColor(board_frame(renderer), cv2.COLOR_RGB2BGR))
+    assert main(["--task=so101_blocks", f"--image={frame}", *BOARD_FLAGS]) == 2
+    error = capsys.readouterr().err
+    assert error.startswith(f"error: cannot write {tmp_path / 'a_file' / 'calibration' / 'tables'}") and (
+        error.endswith("; name another file with --output=PATH\n") and error.count("\n") == 1
+    )
 
 
 def test_the_printable_board_states_its_printed_size(tmp_path, capsys):

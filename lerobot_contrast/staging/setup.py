@@ -17,11 +17,19 @@ VIEWERS = ("serve", "spawn", "none")
 
 
 def default_calibration(task_ref: str) -> Path | None:
-    """Where the calibration of a task file lives: beside it, as <name>.calibration.json."""
-    from lerobot_contrast.domains.task_file.loader import task_file_path
+    """Where the calibration of a task file lives: beside the user's own task file, as <name>.calibration.json; for a
+    shipped example, in LeRobot's calibration folder (HF_LEROBOT_CALIBRATION), as tables/<name>.calibration.json,
+    since the installed package is no place for a user's files (and may be read-only or replaced on upgrade)."""
+    from lerobot_contrast.domains.task_file.loader import examples_dir, task_file_path
 
     path = task_file_path(task_ref)
-    return None if path is None else path.with_suffix(".calibration.json")
+    if path is None:
+        return None
+    if path.resolve().parent == examples_dir().resolve():
+        from lerobot.utils import constants  # read when called: HF_LEROBOT_CALIBRATION may be set by then
+
+        return constants.HF_LEROBOT_CALIBRATION / "tables" / f"{path.stem}.calibration.json"
+    return path.with_suffix(".calibration.json")
 
 
 def geometry(task: Task, size: float) -> BenchGeometry:
