@@ -268,6 +268,7 @@ def _runner(ev: Evaluation, robot: Robot, policy: Policy, observers: Sequence[Ep
         max_episode_s=ev.max_episode_s,
         observers=observers,
         cost_unit=ev.cost_model.unit,
+        cost_model=ev.cost_model,
         say=_say if ev.verbose else None,
     )
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from lerobot.utils.robot_utils import precise_sleep
 
+from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import read_scene, reports_scene
@@ -59,6 +60,7 @@ class RobotRunner:
         max_episode_s: float | None = None,
         observers: Sequence[EpisodeObserver] = (),
         cost_unit: str = "m",
+        cost_model: CostModel | None = None,
         reconnect_s: float = 5.0,
         say: Callable[[str], None] | None = None,
     ) -> None:
@@ -73,6 +75,10 @@ class RobotRunner:
         self.max_steps, self.max_episode_s = max_steps, max_episode_s
         self.observers = list(observers)
         self.cost_unit = cost_unit
+        # A robot that stages its own scene and lets it settle in physics (`measures_staging`) is charged the metres
+        # it reads back after settling, priced by the run's cost model, rather than the plan's poses.
+        settles = getattr(robot, "measures_staging", False) and self.scene_io and operator is None
+        self.read_back_cost = cost_model if settles and cost_model is not None and cost_model.unit == "m" else None
         # After a lost link, reconnecting is tried for `reconnect_s`, once per control period (at least every
         # RETRY_S); `say` tells the operator how long that takes.
         self.reconnect_s, self.say = reconnect_s, say
@@ -129,7 +135,22 @@ class RobotRunner:
         staging = Staging("ready") if self.operator is None else self.operator.stage(context)
         if staging.action == "ready" and self.scene_io:  # in simulation the "operator's hands" place the objects
             self.robot.stage_scene(context.instance.scene)
+            if self.read_back_cost is not None:
+                staging = self._read_back(context, staging)
         return staging
+
+    def _read_back(self, context: TrialContext, staging: Staging) -> Staging:
+        """The staging as the robot reports it after settling: the metres objects moved from where the last trial
+        left them, recorded as the calibrated bench records what it measured (staging/check.py)."""
+        placed = read_scene(self.robot)
+        moved = float(self.read_back_cost(context.current, placed))
+        record = {
+            "planned_cost": round(context.planned_cost, 4),
+            "moved_m": round(moved, 4),
+            "before": context.current.to_json()["objects"],
+            "placed": {name: [round(p.x, 4), round(p.y, 4)] for name, p in placed.objects.items()},
+        }
+        return replace(staging, moved=moved, measured=record)
 
     def _run_episode(self, context: TrialContext) -> Generator[dict[str, Any], dict[str, Any], Episode]:
         self.policy.reset(context)
@@ -245,7 +266,7 @@ class RobotRunner:
 
     def _cost(self, staging: Staging) -> float | None:
         if self.operator is None:
-            return None
+            return staging.moved  # what a robot read back after settling its staging, else None: the plan's cost
         if self.cost_unit == "s":
             return staging.reset_s
         return staging.moved
@@ -295,8 +316,8 @@ class RobotRunner:
             extra["reset_s"] = round(staging.reset_s, 3)
             if staging.moved is not None:
                 extra["moved_reported"] = staging.moved
-            if staging.measured is not None:
-                extra["staging"] = dict(staging.measured)
+        if staging.measured is not None:
+            extra["staging"] = dict(staging.measured)
         return extra
 
 

@@ -42,7 +42,9 @@ def trial_overhead_ms(robot: LiberoSim, task: LiberoObjectTask, trials: int) -> 
 
 
 def reset_s(robot: LiberoSim, resets: int) -> float:
+    """LeRobot's hard reset, what `lerobot-eval` pays per episode (staging builds its worlds with soft resets)."""
     env = robot._require().env
+    env._env.env.hard_reset = True
     start = time.perf_counter()
     for _ in range(resets):
         env.reset()

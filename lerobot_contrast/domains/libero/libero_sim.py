@@ -24,6 +24,8 @@ class LiberoSim(SimulatedRobot):
     config_class = LiberoSimConfig
     name = "libero_sim"
     pose_keys = ("eef.x", "eef.y")
+    # Staged objects settle in MuJoCo's physics: the runner charges the distances read back after settling.
+    measures_staging = True
 
     def __init__(self, config: LiberoSimConfig) -> None:
         super().__init__(config)

@@ -86,6 +86,9 @@ class World:
             observation_width=self.config.observation_width,
             observation_height=self.config.observation_height,
             num_steps_wait=self.config.settle_steps,
+            # Every trial's state is staged here (init state or carried objects), so LeRobot's soft reset serves:
+            # the model and the renderer are built once per world, not again by each of its two resets.
+            hard_reset=False,
         )  # fmt: skip
         self.raw, _ = self.env.reset()
         self.info = info

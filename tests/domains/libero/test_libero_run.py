@@ -54,4 +54,27 @@ def test_a_random_act_policy_runs_a_libero_contrast_set_and_resumes_after_a_kill
     moved = [r for r in done if r["perturbation"] in ("S", "SB")]
     assert moved and all(r["cost"] >= 0.05 for r in moved)  # a scene move carries one object 5-10 cm
     assert all(r["cost"] == 0.0 for r in done if r["perturbation"] == "L")
+    _assert_charged_what_the_simulator_read_back(done)
+
+
+def _assert_charged_what_the_simulator_read_back(done: list[dict]) -> None:
+    """Each trial's cost is the distance from where the last trial left the objects (the first: beside the table)
+    to where LIBERO reports them after settling, within 5 mm per object of the plan; the plan's is kept beside."""
+    from lerobot_contrast import load_task
+    from lerobot_contrast.contrast.scene import Pose, Scene
+
+    task = load_task("libero_object", families=["task0"])
+    cost_model, left = task.cost_model("distance"), task.storage_scene().to_json()["objects"]
+    for record in done:
+        staging = record["extra"]["staging"]
+        before = Scene.from_json({"objects": staging["before"]})
+        placed = Scene(objects={name: Pose(x, y) for name, (x, y) in staging["placed"].items()})
+        planned = Scene.from_json(record["instance"]["scene"])
+        assert staging["before"] == left  # from the scene the previous trial left behind
+        assert abs(record["cost"] - cost_model(before, placed)) < 1e-4 * len(placed.objects)  # placed: to 0.1 mm
+        assert abs(record["cost"] - staging["moved_m"]) < 1e-4
+        assert all(placed.objects[n].distance_to(p) <= 0.005 for n, p in planned.objects.items())
+        assert abs(record["cost"] - staging["planned_cost"]) <= 0.005 * len(planned.objects)
+        left = record["scene_after"]["objects"]
+    assert done[0]["cost"] > 0.5  # the first staging sets every object on the table
     assert all(r["rerun_path"] for r in done)  # a Rerun file per episode, both cameras

@@ -1,11 +1,13 @@
-"""The four perturbations on a real LIBERO scene (libero_object task 0, LeRobot's LiberoEnv): instructions change as
-declared, staged objects move by the planned distance after settling, and LIBERO's own predicates judge the goal."""
+"""The four perturbations on real LIBERO scenes (libero_object task 0 in full, one task of each other suite, in
+LeRobot's LiberoEnv): instructions change as declared, staged objects move by the planned distance after settling,
+and LIBERO's own predicates judge the goal."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from lerobot_contrast import load_task
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.task import perturb
 
@@ -77,3 +79,32 @@ def test_the_goal_is_judged_by_libero_with_teleported_objects(libero_robot, obje
     assert not object_task.is_achieved(other, in_basket)  # after ΔLB the original object is the wrong one
     libero_robot.stage_scene(current.scene)
     assert object_task.is_achieved(other, teleported(new))
+
+
+def _where_every_perturbation_applies(task):
+    """The suite's first task whose first init state every perturbation applies to."""
+    for task_id in task.task_ids:
+        instance = task.instance(task_id, 0)
+        if all(perturb(task, p, instance, np.random.default_rng(0)) for p in task.perturbations):
+            return instance
+    raise AssertionError(f"no task of {task.suite} takes every perturbation at its first init state")
+
+
+# Each suite's scene is a new LiberoEnv (tens of seconds on a CPU): one task each, after libero_object's tests.
+@pytest.mark.parametrize("suite", ["libero_spatial", "libero_goal", "libero_10"])
+def test_every_perturbation_applies_on_a_real_scene_of_the_other_suites(libero_robot, suite):
+    task = load_task(suite)
+    instance = _where_every_perturbation_applies(task)
+    libero_robot.stage_scene(instance.scene)
+    current = instance.derive(scene=libero_robot.read_scene())  # some init states settle by more than 5 mm
+    assert not task.is_achieved(current, current.scene)
+    out = {p.name: perturb(task, p, current, np.random.default_rng(0)) for p in task.perturbations}
+    assert out["L"].instruction != current.instruction and out["L"].goal == current.goal
+    assert out["LB"].instruction != current.instruction and out["LB"].goal != current.goal
+    assert not task.is_achieved(out["LB"], current.scene)  # the rewritten goal, judged by LIBERO's predicates
+    for name in ("S", "SB"):
+        planned = _displacements(current.scene, out[name].scene)
+        libero_robot.stage_scene(out[name].scene)
+        actual = _displacements(current.scene, libero_robot.read_scene())
+        assert max(planned.values()) >= 0.05
+        assert all(abs(actual[n] - planned[n]) <= SETTLED_M for n in planned), (name, planned, actual)
