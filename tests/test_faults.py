@@ -82,14 +82,15 @@ def cli(*args: str) -> subprocess.CompletedProcess:
     )
 
 
-def refused_resume(run: Path, capsys) -> tuple[int, str]:
-    """A resume that must refuse before any trial runs, in this process: the same main as the command, without
-    another interpreter loading torch and LeRobot (seconds a test)."""
+def resumed_here(run: Path, capsys) -> tuple[int, str, str]:
+    """Resume the run in this process: the same main as the command, reading what the killed process left on disk,
+    without another interpreter loading torch and LeRobot (seconds a resume). Its exit code, stdout and stderr."""
     from lerobot_contrast.eval import main
 
     capsys.readouterr()
     code = main([*ARGS, f"--output_dir={run}", "--resume=true"])
-    return code, capsys.readouterr().err
+    said = capsys.readouterr()
+    return code, said.out, said.err
 
 
 def killed_at(moment: str, at: int, *args: str) -> subprocess.CompletedProcess:
@@ -158,21 +159,21 @@ KILLS = {
 
 @pytest.mark.slow
 @pytest.mark.parametrize("case", KILLS)
-def test_a_run_killed_at_any_moment_resumes_to_the_uninterrupted_run(tmp_path, reference, case):
+def test_a_run_killed_at_any_moment_resumes_to_the_uninterrupted_run(tmp_path, reference, case, capsys):
     run, resume = tmp_path / "run", ()
     for moment, at in KILLS[case]:
         killed = killed_at(moment, at, *ARGS, f"--output_dir={run}", *resume)
         assert killed.returncode == -9, killed.stderr[-3000:]
         resume = ("--resume=true",)
-    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
-    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    code, out, err = resumed_here(run, capsys)
+    assert code == 0, err[-3000:]
     assert_same_run(run, reference)
     if ("journal_torn", 20) in KILLS[case]:
-        assert "dropped its last line, cut off mid-write by a kill; that trial runs again" in resumed.stdout
+        assert "dropped its last line, cut off mid-write by a kill; that trial runs again" in out
 
 
 @pytest.mark.slow
-def test_a_second_writer_is_refused_naming_the_first(tmp_path, reference, monkeypatch):
+def test_a_second_writer_is_refused_naming_the_first(tmp_path, reference, monkeypatch, capsys):
     run, marker = tmp_path / "run", tmp_path / "holding"
     assert killed_at("journal_appended", 10, *ARGS, f"--output_dir={run}").returncode == -9
     monkeypatch.setenv("FAULT_MARKER", str(marker))
@@ -181,17 +182,17 @@ def test_a_second_writer_is_refused_naming_the_first(tmp_path, reference, monkey
     deadline = time.monotonic() + 120
     while not marker.exists() and first.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
-    second = cli(*ARGS, f"--output_dir={run}", "--resume=true")
+    code, _, err = resumed_here(run, capsys)  # the second writer
     marker.unlink()
     _, stderr = first.communicate(timeout=300)
-    assert second.returncode == 2 and second.stderr.count("\n") == 1, second.stderr
-    assert f"is in use by process {first.pid} (an evaluation, since " in second.stderr
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"is in use by process {first.pid} (an evaluation, since " in err
     assert first.returncode == 0, stderr[-3000:]
     assert_same_run(run, reference)
 
 
 @pytest.mark.slow
-def test_a_full_disk_is_one_line_and_the_run_resumes_once_there_is_room(tmp_path, reference):
+def test_a_full_disk_is_one_line_and_the_run_resumes_once_there_is_room(tmp_path, reference, capsys):
     run = tmp_path / "run"
     full = killed_at("disk_full", 12, *ARGS, f"--output_dir={run}")
     assert full.returncode == 2 and full.stderr.count("\n") == 1, full.stderr[-3000:]
@@ -199,8 +200,8 @@ def test_a_full_disk_is_one_line_and_the_run_resumes_once_there_is_room(tmp_path
         f"error: no space left on the disk holding {run}; free space and resume with --output_dir={run} " in full.stderr
     )
     assert leftovers(run) == [] and len(journal(run)) == 12
-    resumed = cli(*ARGS, f"--output_dir={run}", "--resume=true")
-    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    code, _, err = resumed_here(run, capsys)
+    assert code == 0, err[-3000:]
     assert_same_run(run, reference)
 
 
@@ -291,7 +292,7 @@ def test_a_resume_refuses_a_dataset_that_lacks_what_the_journal_names_naming_the
     (target,) = run.glob(pattern)
     damage(target)
     before = files(run)
-    code, err = refused_resume(run, capsys)
+    code, _, err = resumed_here(run, capsys)
     assert code == 2 and err.count("\n") == 1, err[-3000:]
     assert err.startswith(f"error: {target}{named} {said}"), err
     assert "; restore it from a copy and resume, or run the evaluation again into a new --output_dir" in err
@@ -303,7 +304,7 @@ def test_a_resume_refuses_a_deleted_dataset_the_journal_names(tmp_path, referenc
     run = tmp_path / "run"
     shutil.copytree(reference, run)
     shutil.rmtree(run / "dataset")
-    code, err = refused_resume(run, capsys)
+    code, _, err = resumed_here(run, capsys)
     assert code == 2 and err.count("\n") == 1, err[-3000:]
     assert err.startswith(f"error: {run / 'dataset'} is missing, but the journal names "), err
     assert not (run / "dataset").exists()
