@@ -1,5 +1,6 @@
-"""Sweeps on a real local Ray (2 CPUs, one session shared by the module): every cell run once, results gathered,
-a bad cell reported in one line, and nothing lost or duplicated when a worker or the whole sweep is killed."""
+"""Sweeps on a real local Ray (2 CPUs and one declared GPU, one session shared by the module): every cell run once,
+results gathered, a bad cell reported in one line, cells on cuda given their GPU share, and nothing lost or
+duplicated when a worker or the whole sweep is killed."""
 
 import json
 import logging
@@ -32,13 +33,15 @@ SMALL = {
         {"name": "lb", "strategy": "contrast", "perturbations": ["LB1", "LB2"]},
     ],
 }
-# Cells long enough (about 30 trials each) to be killed in the middle.
-LONG = {"eval": {"n_instances": 6, **ORACLE, "max_episode_steps": 40}, "grid": {"seed": [0, 1, 2]}}
+# Cells long enough (21 planned trials each) to be killed in the middle; three cells on two CPUs, so that one waits
+# for a CPU when the sweep is killed.
+LONG = {"eval": {"n_instances": 3, **ORACLE, "max_episode_steps": 40}, "grid": {"seed": [0, 1, 2]}}
 
 
 @pytest.fixture(scope="module")
 def local_ray():
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
+    # One logical GPU: Ray schedules GPU cells on it and sets their CUDA_VISIBLE_DEVICES without any hardware.
+    ray.init(num_cpus=2, num_gpus=1, include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
     yield ray.get_runtime_context().gcs_address
     ray.shutdown()
 
@@ -133,6 +136,19 @@ def test_a_learned_policy_loads_once_per_worker_not_once_per_cell(local_ray, tmp
     cells = index(out).values()
     workers = {cell["pid"] for cell in cells}
     assert sum(cell["policy_loaded"] for cell in cells) == len(workers) < len(cells)
+
+
+def test_cells_on_cuda_share_the_gpu_ray_gives_them_and_cells_on_the_cpu_ask_for_none(local_ray, tmp_path):
+    cells = [{"name": f"gpu{seed}", "seed": seed, "policy.device": "cuda"} for seed in (0, 1)]
+    spec = {"eval": {"n_instances": 1, **ORACLE, "max_episode_steps": 5}, "cells": [*cells, {"name": "cpu"}]}
+    out = tmp_path / "out"
+    assert main([str(write(tmp_path, spec)), f"--output_dir={out}", "--ray.gpus_per_cell=0.5"]) == 0
+    cells = index(out)
+    assert {name: (cell["gpus"], cell["cuda_visible_devices"]) for name, cell in cells.items()} == {
+        "gpu0": (0.5, "0"),
+        "gpu1": (0.5, "0"),
+        "cpu": (0.0, None),
+    }
 
 
 @pytest.mark.slow
