@@ -1,5 +1,5 @@
-"""Fault injection end to end: `python -m lerobot_contrast.eval` SIGKILLed at chosen moments and resumed, two
-writers on one run directory, and a full disk. Under every fault nothing is lost or duplicated, and the resumed run
+"""Fault injection end to end: the evaluation SIGKILLed at chosen moments (each run a process of its own, forked
+from one that has imported it: tests/fault_moments.py) and resumed, two writers on one run directory, and a full disk. Under every fault nothing is lost or duplicated, and the resumed run
 equals an uninterrupted one, its LeRobotDataset and Rerun files included."""
 
 from __future__ import annotations
@@ -16,64 +16,10 @@ import pyarrow.parquet as pq
 import pytest
 from lerobot.datasets import LeRobotDataset
 
+from tests import fault_moments
+
 ARGS = ["--n_instances=5", "--seed=3", "--policy.type=oracle", "--record_dataset=true"]
 VARYING = ("duration_s", "started_at", "wall_time_s")  # the clock's, not the run's
-# Runs eval's main with one moment patched to SIGKILL the process: test-side only, the product has no such hook.
-KILLER = """
-import json, os, signal, sys, time
-from pathlib import Path
-import lerobot.datasets.dataset_metadata as metadata
-import lerobot_contrast.record.journal as journal
-import pyarrow.parquet as pq
-from lerobot_contrast.eval import main
-from lerobot_contrast.record.dataset import DatasetRecorder
-
-moment, at = sys.argv[1], int(sys.argv[2])
-
-def kill():
-    os.kill(os.getpid(), signal.SIGKILL)
-
-def hold():  # say so, then wait for the test to let the run go on
-    marker = Path(os.environ["FAULT_MARKER"])
-    marker.touch()
-    while marker.exists():
-        time.sleep(0.05)
-
-def after(owner, name, strikes, then=kill):
-    real = getattr(owner, name)
-    def patched(*args, **kwargs):
-        result = real(*args, **kwargs)
-        if strikes(args, result):
-            then()
-        return result
-    setattr(owner, name, patched)
-
-def torn(path, data, real=journal._append_line):
-    if json.loads(data)["index"] != at:
-        return real(path, data)
-    real(path, data[: len(data) // 2])
-    kill()
-
-if moment == "dataset_counted":  # info.json counts the episode; its metadata and journal line are not written
-    after(metadata, "write_info", lambda args, _: args[0].total_episodes == at)
-elif moment == "episode_saved":  # the episode is finalized; its trial's journal line is not written
-    after(DatasetRecorder, "end", lambda args, files: files.dataset_episode == at)
-elif moment == "journal_appended":
-    after(journal.Journal, "append", lambda args, _: args[1].index == at)
-elif moment == "journal_torn":  # half a line reaches the disk
-    journal._append_line = torn
-elif moment == "final_write":  # results.parquet is being written after the last trial
-    after(pq, "write_table", lambda args, _: str(args[1]).endswith("results.parquet.tmp"))
-elif moment == "disk_full":  # the disk fills up as the journal line is written
-    def full(path, data, real=journal._append_line):
-        if json.loads(data)["index"] == at:
-            raise OSError(28, os.strerror(28))
-        return real(path, data)
-    journal._append_line = full
-elif moment == "hold_after_append":
-    after(journal.Journal, "append", lambda args, _: args[1].index == at, then=hold)
-sys.exit(main(sys.argv[3:]))
-"""
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
@@ -93,9 +39,9 @@ def resumed_here(run: Path, capsys) -> tuple[int, str, str]:
     return code, said.out, said.err
 
 
-def killed_at(moment: str, at: int, *args: str) -> subprocess.CompletedProcess:
-    command = [sys.executable, "-c", KILLER, moment, str(at), *args]
-    return subprocess.run(command, capture_output=True, text=True, timeout=300)
+def killed_at(moment: str, at: int, run: Path, *flags: str, **env: str) -> fault_moments.Run:
+    """The evaluation into `run`, in a process of its own that `moment` kills (tests/fault_moments.py)."""
+    return fault_moments.start(moment, at, [*ARGS, f"--output_dir={run}", *flags], run.parent / "forked", env)
 
 
 def journal(run: Path) -> list[dict]:
@@ -162,8 +108,8 @@ KILLS = {
 def test_a_run_killed_at_any_moment_resumes_to_the_uninterrupted_run(tmp_path, reference, case, capsys):
     run, resume = tmp_path / "run", ()
     for moment, at in KILLS[case]:
-        killed = killed_at(moment, at, *ARGS, f"--output_dir={run}", *resume)
-        assert killed.returncode == -9, killed.stderr[-3000:]
+        code, _, err = killed_at(moment, at, run, *resume).wait()
+        assert code == -9, err[-3000:]
         resume = ("--resume=true",)
     code, out, err = resumed_here(run, capsys)
     assert code == 0, err[-3000:]
@@ -173,32 +119,28 @@ def test_a_run_killed_at_any_moment_resumes_to_the_uninterrupted_run(tmp_path, r
 
 
 @pytest.mark.slow
-def test_a_second_writer_is_refused_naming_the_first(tmp_path, reference, monkeypatch, capsys):
+def test_a_second_writer_is_refused_naming_the_first(tmp_path, reference, capsys):
     run, marker = tmp_path / "run", tmp_path / "holding"
-    assert killed_at("journal_appended", 10, *ARGS, f"--output_dir={run}").returncode == -9
-    monkeypatch.setenv("FAULT_MARKER", str(marker))
-    command = [sys.executable, "-c", KILLER, "hold_after_append", "20", *ARGS, f"--output_dir={run}", "--resume=true"]
-    first = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert killed_at("journal_appended", 10, run).wait()[0] == -9
+    first = killed_at("hold_after_append", 20, run, "--resume=true", FAULT_MARKER=str(marker))
     deadline = time.monotonic() + 120
-    while not marker.exists() and first.poll() is None and time.monotonic() < deadline:
+    while not marker.exists() and first.process.is_alive() and time.monotonic() < deadline:
         time.sleep(0.05)
     code, _, err = resumed_here(run, capsys)  # the second writer
     marker.unlink()
-    _, stderr = first.communicate(timeout=300)
+    first_code, _, first_err = first.wait()
     assert code == 2 and err.count("\n") == 1, err
     assert f"is in use by process {first.pid} (an evaluation, since " in err
-    assert first.returncode == 0, stderr[-3000:]
+    assert first_code == 0, first_err[-3000:]
     assert_same_run(run, reference)
 
 
 @pytest.mark.slow
 def test_a_full_disk_is_one_line_and_the_run_resumes_once_there_is_room(tmp_path, reference, capsys):
     run = tmp_path / "run"
-    full = killed_at("disk_full", 12, *ARGS, f"--output_dir={run}")
-    assert full.returncode == 2 and full.stderr.count("\n") == 1, full.stderr[-3000:]
-    assert (
-        f"error: no space left on the disk holding {run}; free space and resume with --output_dir={run} " in full.stderr
-    )
+    code, _, err = killed_at("disk_full", 12, run).wait()
+    assert code == 2 and err.count("\n") == 1, err[-3000:]
+    assert f"error: no space left on the disk holding {run}; free space and resume with --output_dir={run} " in err
     assert leftovers(run) == [] and len(journal(run)) == 12
     code, _, err = resumed_here(run, capsys)
     assert code == 0, err[-3000:]
