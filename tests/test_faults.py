@@ -1,6 +1,7 @@
 """Fault injection end to end: the evaluation SIGKILLed at chosen moments (each run a process of its own, forked
-from one that has imported it: tests/fault_moments.py) and resumed, two writers on one run directory, and a full disk. Under every fault nothing is lost or duplicated, and the resumed run
-equals an uninterrupted one, its LeRobotDataset and Rerun files included."""
+from one that has imported it: tests/fault_moments.py) and resumed, two writers on one run directory, and a full
+disk. Under every fault nothing is lost or duplicated, and the resumed run equals an uninterrupted one, its
+LeRobotDataset and Rerun files included."""
 
 from __future__ import annotations
 
