@@ -1,5 +1,5 @@
-"""A sweep on a multi-node Ray cluster (a head and a worker node on loopback, one CPU each): its cells run on
-both nodes and their results are gathered in one sweep folder."""
+"""A sweep on a multi-node Ray cluster (a head and a worker node on loopback, one CPU each, no GPU): its cells run
+on both nodes and their results are gathered in one sweep folder; cells asking for a GPU are refused in one line."""
 
 import json
 
@@ -18,13 +18,19 @@ SPEC = {
 
 
 @pytest.mark.slow
-def test_cells_spread_over_the_nodes_of_a_cluster_and_their_results_are_gathered(tmp_path):
-    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
-    cluster.add_node(num_cpus=1)
+def test_cells_spread_over_the_nodes_of_a_cluster_and_their_results_are_gathered(tmp_path, capsys):
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "num_gpus": 0, "include_dashboard": False})
+    cluster.add_node(num_cpus=1, num_gpus=0)
     try:
         cluster.wait_for_nodes()
         ray.init(address=cluster.address, log_to_driver=False)
         path, out = tmp_path / "sweep.yaml", tmp_path / "out"
+        path.write_text(yaml.safe_dump({**SPEC, "eval": {**SPEC["eval"], "policy.device": "cuda"}}), encoding="utf-8")
+        assert main([str(path), f"--output_dir={out}", f"--ray.address={cluster.address}"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error: cell seed=0 (and 3 more) runs its policy on cuda and asks Ray for 1 GPU")
+        assert "the Ray cluster has no GPU; run the sweep where Ray has GPUs" in err and "\n" not in err
+        assert not out.exists()  # refused before anything is written
         path.write_text(yaml.safe_dump(SPEC), encoding="utf-8")
         assert main([str(path), f"--output_dir={out}", f"--ray.address={cluster.address}"]) == 0
         cells = json.loads((out / "sweep.json").read_text())["cells"]

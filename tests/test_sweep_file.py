@@ -96,7 +96,10 @@ def test_help_lists_the_sweep_flags(capsys):
     assert main(["--help"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("usage: python -m lerobot_contrast.sweep SWEEP.yaml")
-    assert all(f"  --{flag} " in out for flag in ("output_dir", "resume", "max_retries", "ray.address", "ray.num_cpus"))
+    assert all(
+        f"  --{flag} " in out
+        for flag in ("output_dir", "resume", "max_retries", "ray.address", "ray.num_cpus", "ray.gpus_per_cell")
+    )
 
 
 def test_a_dry_run_names_a_policy_path_that_is_not_there(tmp_path, capsys):
@@ -105,3 +108,13 @@ def test_a_dry_run_names_a_policy_path_that_is_not_there(tmp_path, capsys):
     assert main([str(write(tmp_path, spec)), f"--output_dir={tmp_path / 'out'}", "--dry_run", "true"]) == 2
     err = capsys.readouterr().err
     assert f"--policy.path: no such directory: {missing}" in err and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize(("value", "shown"), [("1.5", "1.5"), ("0", "0"), ("-0.5", "-0.5")])
+def test_a_gpu_share_ray_cannot_give_is_refused_in_one_line(tmp_path, capsys, value, shown):
+    out = tmp_path / "out"
+    assert main([str(write(tmp_path, SMALL)), f"--output_dir={out}", f"--ray.gpus_per_cell={value}"]) == 2
+    err = capsys.readouterr().err
+    expected = f"--ray.gpus_per_cell must be a fraction of one GPU (0.25) or a whole number of GPUs, got {shown}"
+    assert expected in err and err.count("\n") == 1, err
+    assert not out.exists()

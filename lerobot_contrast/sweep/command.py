@@ -4,6 +4,7 @@ tasks, on this machine or a cluster, each into its own run directory under one s
 from __future__ import annotations
 
 import sys
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -60,6 +61,7 @@ def index_entries(cells: list[Cell], outcomes: dict[str, CellOutcome]) -> list[d
             entry |= {"status": outcome.status, "trials": outcome.trials, "seconds": round(outcome.seconds, 1)}
             entry |= {"cpu_s": round(outcome.cpu_s, 1), "node": outcome.node, "pid": outcome.pid}
             entry |= {"policy_loaded": outcome.policy_loaded, "error": outcome.error}
+            entry |= {"gpus": outcome.gpus, "cuda_visible_devices": outcome.cuda_visible_devices}
         entries.append(entry)
     return entries
 
@@ -68,6 +70,7 @@ def run_sweep(cfg: SweepConfig, console: Console) -> int:
     """Run the sweep file cfg.sweep names; the exit code is 1 when any cell failed."""
     if cfg.sweep is None:
         raise ConfigError(f"give the sweep file: {COMMAND}")
+    cfg.ray.check()
     outcomes = execute(cfg, read_sweep_file(cfg.sweep), console)
     return int(any(outcome.status != "complete" for outcome in outcomes.values()))
 
@@ -77,7 +80,7 @@ def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[st
     write the sweep index and results table; every cell's outcome by name (none with --dry_run)."""
     # Ray, pandas, LeRobot and torch load here, once the flags are known to be sound.
     from lerobot_contrast.record.sweep_dir import is_complete, write_index, write_sweep_results
-    from lerobot_contrast.sweep.ray_pool import run_cells, start_ray
+    from lerobot_contrast.sweep.ray_pool import check_gpus, run_cells, start_ray
 
     folder = sweep_folder(cfg, spec)
     cells = sweep_cells(cfg.sweep, spec, folder)
@@ -88,14 +91,17 @@ def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[st
         console.print(f"{len(cells)} cells into {folder}", highlight=False, soft_wrap=True)
         return {}
     outcomes = {c.name: _finished(c) for c in cells if is_complete(Path(c.config.output_dir))}
+    todo = [cell for cell in cells if cell.name not in outcomes]
+    if todo:  # Ray is joined, and its GPUs checked, before the sweep folder is written
+        start_ray(cfg.ray)
+        check_gpus(todo, cfg.ray.gpus_per_cell)
     folder.mkdir(parents=True, exist_ok=True)
     write_index(folder, index_entries(cells, outcomes))
     if outcomes:
         console.print(f"{len(outcomes)} of {len(cells)} cells already complete", highlight=False, soft_wrap=True)
-    todo = [cell for cell in cells if cell.name not in outcomes]
     if todo:
-        start_ray(cfg.ray)
-        ran = run_cells(todo, planned, cfg.max_retries, lambda o: _report(console, folder, o), console)
+        report = partial(_report, console, folder)
+        ran = run_cells(todo, planned, cfg.max_retries, report, console, cfg.ray.gpus_per_cell)
         outcomes |= {outcome.name: outcome for outcome in ran}
     entries = index_entries(cells, outcomes)
     write_index(folder, entries)

@@ -1,5 +1,5 @@
-"""The sweep's cells as Ray tasks: one CPU each (and a GPU for a policy on cuda), retried on another worker when
-theirs dies, watched through their journals for the progress view."""
+"""The sweep's cells as Ray tasks: one CPU each (and --ray.gpus_per_cell GPUs for a policy on cuda), retried on
+another worker when theirs dies, watched through their journals for the progress view."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import ray
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.sweep.cells import Cell
 from lerobot_contrast.sweep.settings import RayArgs
 from lerobot_contrast.sweep.worker import CellOutcome, run_cell, wants_gpu
@@ -40,9 +41,32 @@ def start_ray(args: RayArgs) -> None:
     """Join the cluster `args` names, or start a local Ray; a Ray this process already joined is used as is."""
     if ray.is_initialized():
         return
-    local = {"num_cpus": args.num_cpus or os.cpu_count(), "include_dashboard": False}
+    local = {"num_cpus": args.num_cpus or os.cpu_count(), "num_gpus": args.num_gpus, "include_dashboard": False}
     quiet = {"log_to_driver": False, "logging_level": logging.WARNING}
     ray.init(address=args.address, **quiet, **({} if args.address else local))
+
+
+def cell_gpus(cell: Cell, gpus_per_cell: float) -> float:
+    """The GPUs `cell` asks Ray for: `gpus_per_cell` for a policy on cuda, none for one on the CPU."""
+    return gpus_per_cell if wants_gpu(cell.config.policy) else 0.0
+
+
+def check_gpus(cells: Sequence[Cell], gpus_per_cell: float) -> None:
+    """Refuse GPU cells that no node of the joined Ray cluster can hold (Ray would leave them waiting forever)."""
+    wanting = [cell for cell in cells if cell_gpus(cell, gpus_per_cell)]
+    if not wanting:
+        return
+    most = max((node["Resources"].get("GPU", 0.0) for node in ray.nodes() if node["Alive"]), default=0.0)
+    if most >= gpus_per_cell:
+        return
+    has = "has no GPU" if most == 0 else f"has at most {most:g} GPUs on one node"
+    more = f" (and {len(wanting) - 1} more)" if len(wanting) > 1 else ""
+    raise UserError(
+        f"cell {wanting[0].name}{more} runs its policy on {wanting[0].config.policy.device} and asks Ray for "
+        f"{gpus_per_cell:g} GPU, but the Ray cluster {has}; "
+        "run the sweep where Ray has GPUs (ray start --num-gpus=N, or --ray.num_gpus=N for this machine's Ray), "
+        "lower --ray.gpus_per_cell, or set policy.device: cpu"
+    )
 
 
 def run_cells(
@@ -51,13 +75,14 @@ def run_cells(
     max_retries: int,
     report: Callable[[CellOutcome], None],
     console: Console,
+    gpus_per_cell: float = 1.0,
 ) -> list[CellOutcome]:
     """Run every cell as a Ray task and return their outcomes in the cells' order, calling `report` as each ends."""
     task = ray.remote(run_cell)
     refs = {
         task.options(
             num_cpus=1,
-            num_gpus=int(wants_gpu(cell.config.policy)),
+            num_gpus=cell_gpus(cell, gpus_per_cell),
             max_retries=max_retries,
             name=f"cell {cell.name}",
             runtime_env={"env_vars": ONE_THREAD},

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from lerobot_contrast.contrast.errors import UserError
+
 
 @dataclass
 class RayArgs:
@@ -13,6 +15,22 @@ class RayArgs:
     address: str | None = None
     # CPUs of the Ray started on this machine, which is how many cells run at once (default: all its cores).
     num_cpus: int | None = None
+    # GPUs each cell whose policy.device is cuda asks Ray for: 1 gives it a GPU of its own, a fraction (0.25) lets
+    # that many cells (4) share one; a cell on the CPU asks for none.
+    gpus_per_cell: float = 1.0
+    # GPUs of the Ray started on this machine (default: those Ray finds).
+    num_gpus: int | None = None
+
+    def check(self) -> None:
+        """Refuse a GPU request Ray cannot express (draccus would hide why, so it is checked after parsing)."""
+        whole = float(self.gpus_per_cell).is_integer()
+        if not (0 < self.gpus_per_cell <= 1 or (self.gpus_per_cell > 1 and whole)):
+            raise UserError(
+                f"--ray.gpus_per_cell must be a fraction of one GPU (0.25) or a whole number of GPUs, "
+                f"got {self.gpus_per_cell:g}"
+            )
+        if self.num_gpus is not None and self.num_gpus < 0:
+            raise UserError(f"--ray.num_gpus must be 0 or more, got {self.num_gpus}")
 
 
 @dataclass

@@ -43,6 +43,8 @@ class CellOutcome:
     policy_loaded: bool = False  # whether it loaded its learned policy, rather than finding it loaded
     error: str | None = None  # one line
     detail: str | None = None  # the traceback of an unexpected error
+    gpus: float = 0.0  # the share of GPUs Ray gave the cell (--ray.gpus_per_cell for a policy on cuda)
+    cuda_visible_devices: str | None = None  # the GPUs Ray made visible to the cell, where it gave it any
 
 
 def wants_gpu(policy: PolicyArgs) -> bool:
@@ -58,9 +60,11 @@ def run_cell(name: str, cfg: EvalConfig) -> CellOutcome:
 
     def outcome(status: str, trials: int = 0, error: str | None = None, detail: str | None = None) -> CellOutcome:
         seconds, cpu_s, loaded = time.perf_counter() - start, time.process_time() - cpu_start, len(_LOADED)
+        gpus = _gpus()
         return CellOutcome(
-            name, status, trials, seconds, cpu_s, _node(), os.getpid(), loaded > loaded_before, error, detail
-        )
+            name, status, trials, seconds, cpu_s, _node(), os.getpid(), loaded > loaded_before, error, detail,
+            gpus, os.environ.get("CUDA_VISIBLE_DEVICES") if gpus else None,
+        )  # fmt: skip
 
     try:
         trials = _run(dataclasses.replace(cfg))
@@ -109,3 +113,9 @@ def _node() -> str | None:
     import ray
 
     return ray.get_runtime_context().get_node_id() if ray.is_initialized() else None
+
+
+def _gpus() -> float:
+    import ray
+
+    return ray.get_runtime_context().get_assigned_resources().get("GPU", 0.0) if ray.is_initialized() else 0.0
