@@ -6,7 +6,6 @@ LeRobotDataset and Rerun files included."""
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -150,15 +149,41 @@ def test_a_full_disk_is_one_line_and_the_run_resumes_once_there_is_room(tmp_path
 
 # Each size fills up at another point: config and plan, the first Rerun file, a dataset episode, later episodes.
 DISK_SIZES = ("16k", "200k", "600k", "1200k")
+# Run in a mount namespace of its own: a tmpfs of the given size, the evaluation onto it (stopped by the full disk),
+# then the disk given room and the run resumed. Each run is a process of its own, forked from this one once it has
+# imported eval (not another interpreter loading torch and LeRobot); what each said and its exit code go to OUT.
 ON_A_SMALL_DISK = """
-mount -t tmpfs -o size="$1" tmpfs "$2" || exit 99
-shift 2
-"$@" --output_dir="$DISK/run" > "$OUT/first.out" 2> "$OUT/first.err"; echo $? > "$OUT/first.rc"
-find "$DISK" -name '*.tmp' -o -name '*.partial' > "$OUT/leftovers"
-mount -o remount,size=512m "$DISK"
-if [ -d "$DISK/run" ]; then AGAIN=--resume=true; else AGAIN=--resume=false; fi
-"$@" --output_dir="$DISK/run" "$AGAIN" > "$OUT/again.out" 2> "$OUT/again.err"; echo $? > "$OUT/again.rc"
-cp -a "$DISK/run" "$OUT/run"
+import os, subprocess, sys, traceback
+from pathlib import Path
+import lerobot_contrast.record.dataset, rerun, torch  # what every run loads, loaded once
+from lerobot_contrast.eval import main
+
+size, disk, out, args = sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3]), sys.argv[4:]
+if subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(disk)]).returncode:
+    sys.exit(99)
+
+def run(name, *flags):
+    pid = os.fork()
+    if pid == 0:
+        code = 1
+        try:
+            for fd, suffix in ((1, "out"), (2, "err")):
+                os.dup2(os.open(out / f"{name}.{suffix}", os.O_WRONLY | os.O_CREAT | os.O_TRUNC), fd)
+            code = main([*args, f"--output_dir={disk / 'run'}", *flags])
+        except BaseException:
+            traceback.print_exc()
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+    (out / f"{name}.rc").write_text(f"{os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])}\\n")
+
+run("first")
+leftovers = sorted(str(p) for p in disk.rglob("*") if p.name.endswith((".tmp", ".partial")))
+(out / "leftovers").write_text("".join(f"{p}\\n" for p in leftovers))
+subprocess.run(["mount", "-o", "remount,size=512m", str(disk)], check=True)
+run("again", "--resume=true" if (disk / "run").is_dir() else "--resume=false")
+subprocess.run(["cp", "-a", str(disk / "run"), str(out / "run")], check=True)
 """
 
 
@@ -177,9 +202,8 @@ def test_a_run_on_a_small_disk_stops_in_one_line_and_completes_when_given_room(t
     disk, out = tmp_path / "disk", tmp_path / "out"
     disk.mkdir()
     out.mkdir()
-    command = ["unshare", "-rm", "sh", "-c", ON_A_SMALL_DISK, "sh", size, str(disk)]
-    command += [sys.executable, "-m", "lerobot_contrast.eval", *ARGS]
-    subprocess.run(command, env={**os.environ, "DISK": str(disk), "OUT": str(out)}, check=True, timeout=600)
+    command = ["unshare", "-rm", sys.executable, "-c", ON_A_SMALL_DISK, size, str(disk), str(out), *ARGS]
+    subprocess.run(command, check=True, timeout=600)
     first, again = (out / "first.err").read_text(), (out / "again.err").read_text()
     assert (out / "first.rc").read_text().strip() == "2" and first.count("\n") == 1, first[-3000:]
     assert first.startswith(f"error: no space left on the disk holding {disk / 'run'}; free space and ")
