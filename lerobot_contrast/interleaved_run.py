@@ -132,7 +132,8 @@ class Session:
         operator = None if ev.operator is None else PairConsole(ev.operator, spec.label, self.cfg.blind)
         runner = RobotRunner(
             ev.robot, ev.policy, ev.task, operator=operator, fps=ev.fps, max_steps=ev.max_steps,
-            max_episode_s=ev.max_episode_s, observers=ev.observers, cost_unit=ev.cost_model.unit, say=print,
+            max_episode_s=ev.max_episode_s, observers=ev.observers, cost_unit=ev.cost_model.unit, cost_model=ev.cost_model,
+            say=print,
         )  # fmt: skip
         if operator is not None:
             self.consoles.append(operator)
