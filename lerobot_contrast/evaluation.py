@@ -80,6 +80,7 @@ class Evaluation:
     lanes: int = 1  # simulated chains of trials run side by side (lane_runner.py), with the same results as one
     policy_for: Callable[[Any], Policy] | None = None  # the policy for another lane's robot (None: a copy)
     lane_threads: int = 1  # threads that answer the lanes (lane_choice.lane_threads)
+    shared_episodes: Any = None  # episodes shared with a sweep's other cells (sweep/shared_episodes.py)
 
     @property
     def settings(self) -> dict[str, Any]:
@@ -270,6 +271,7 @@ def _runner(ev: Evaluation, robot: Robot, policy: Policy, observers: Sequence[Ep
         cost_unit=ev.cost_model.unit,
         cost_model=ev.cost_model,
         say=_say if ev.verbose else None,
+        shared=ev.shared_episodes,
     )
 
 

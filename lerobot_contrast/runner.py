@@ -29,6 +29,8 @@ from lerobot_contrast.record.observer import EpisodeObserver
 if TYPE_CHECKING:
     from lerobot.robots import Robot
 
+    from lerobot_contrast.sweep.shared_episodes import SharedEpisodes
+
 # How an episode can end without a label: the operator stopped the robot, or the robot went away.
 ABORTS = ("estop", "disconnected")
 # The shortest pause between two tries to reconnect a lost robot.
@@ -63,6 +65,7 @@ class RobotRunner:
         cost_model: CostModel | None = None,
         reconnect_s: float = 5.0,
         say: Callable[[str], None] | None = None,
+        shared: SharedEpisodes | None = None,
     ) -> None:
         self.scene_io = reports_scene(robot, task.storage_scene().objects)
         if operator is None and not self.scene_io:
@@ -88,6 +91,14 @@ class RobotRunner:
         # Why the session cannot go on (robot lost, operator stopped after an abort), raised at the next trial
         # so that the trial that ended this way is journalled first.
         self._halt: Exception | None = None
+        self.shared = shared
+
+    @property
+    def _shares(self) -> bool:
+        """Whether episodes come from and go to `shared`: only where nothing watches or stages them but the
+        simulator itself (an episode taken from another cell has no frames to record)."""
+        unattended = self.operator is None and self.scene_io and self.read_back_cost is None
+        return self.shared is not None and unattended and not self.observers
 
     @property
     def halted(self) -> Exception | None:
@@ -108,10 +119,16 @@ class RobotRunner:
                 raise SessionStopped("the operator stopped the session")
             if staging.action == "skip":
                 return _skipped(context)
-            episode = yield from self._run_episode(context)
-            if episode.ended_by in ABORTS:
-                return self._aborted(context, staging, episode)
-            scene_after = self._scene_after(context, episode, staging)
+            shared = self.shared.get(context) if self._shares else None
+            if shared is not None:  # another cell ran this very episode (sweep/shared_episodes.py)
+                episode, scene_after = shared
+            else:
+                episode = yield from self._run_episode(context)
+                if episode.ended_by in ABORTS:
+                    return self._aborted(context, staging, episode)
+                scene_after = self._scene_after(context, episode, staging)
+                if self._shares:
+                    self.shared.put(context, episode, scene_after)
             label = self._label(context, episode, scene_after)
             if label.action == "done":
                 return self._finish(context, staging, episode, scene_after, label)

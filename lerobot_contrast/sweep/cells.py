@@ -17,8 +17,9 @@ import yaml
 from lerobot_contrast.build import TASK_ROBOTS, choose_robot, register_robots
 from lerobot_contrast.config import ConfigError, EvalConfig
 from lerobot_contrast.flags import flag_names, flag_types
+from lerobot_contrast.sweep.shared_episodes import FOLDER
 
-FILE_KEYS = ("output_dir", "eval", "grid", "cells")
+FILE_KEYS = ("output_dir", "eval", "grid", "cells", "share_episodes")
 # Settings the sweep decides for every cell: where it is written, whether it resumes, who stages its scenes.
 SET_BY_SWEEP = ("output_dir", "resume", "dry_run", "operator", "push_to_hub", "repo_id", "private")
 # Settings written as nested mappings (policy: {type: oracle}) or dotted keys (policy.type: oracle): the robot
@@ -40,6 +41,7 @@ class Cell:
     settings: dict[str, Any]
     config: EvalConfig
     label: str | None = None  # the `name` of its entry in the sweep file's cells list
+    shared: Path | None = None  # the folder of episodes its cells share (share_episodes: true), else None
 
 
 def read_sweep_file(path: Path) -> dict[str, Any]:
@@ -162,6 +164,10 @@ def sweep_cells(path: Path, spec: dict[str, Any], output_dir: Path) -> list[Cell
     register_robots()  # robot types by name, so a real robot is recognised and refused
     base = flatten(_section(path, spec, "eval", dict))
     check_keys(path, "eval", base)
+    share = spec.get("share_episodes", False)
+    if not isinstance(share, bool):
+        raise SweepFileError(f"{path}: share_episodes must be true or false, got {share!r}")
+    shared = output_dir.resolve() / FOLDER if share else None
     cells: list[Cell] = []
     for label, entry, combo in expand(path, spec):
         name, settings = cell_name(label, entry, combo), entry | combo
@@ -169,5 +175,5 @@ def sweep_cells(path: Path, spec: dict[str, Any], output_dir: Path) -> list[Cell
             raise SweepFileError(f"{path}: two cells are both named {name}; give their cells entries distinct names")
         cfg = cell_config(path, name, base | settings)
         cfg.output_dir = output_dir.resolve() / name
-        cells.append(Cell(name, settings, cfg, label))
+        cells.append(Cell(name, settings, cfg, label, shared))
     return cells

@@ -86,7 +86,7 @@ def run_cells(
             max_retries=max_retries,
             name=f"cell {cell.name}",
             runtime_env={"env_vars": ONE_THREAD},
-        ).remote(cell.name, cell.config): cell
+        ).remote(cell.name, cell.config, cell.shared): cell
         for cell in cells
     }
     finished: dict[str, int] = {}  # complete cells count as their whole plan (a budget may stop one earlier)

@@ -22,6 +22,7 @@ from lerobot_contrast.policies import PRETRAINED_BUILD, Policy, make_policy, pol
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.sweep_dir import is_complete
+from lerobot_contrast.sweep.shared_episodes import SharedEpisodes
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
@@ -51,9 +52,10 @@ def wants_gpu(policy: PolicyArgs) -> bool:
     return str(policy.device or "").startswith("cuda")
 
 
-def run_cell(name: str, cfg: EvalConfig) -> CellOutcome:
-    """Run (or resume, or find finished) the cell's evaluation in `cfg.output_dir`; never raises for the cell's
-    own errors, so one bad cell does not stop the sweep."""
+def run_cell(name: str, cfg: EvalConfig, shared: Path | None = None) -> CellOutcome:
+    """Run (or resume, or find finished) the cell's evaluation in `cfg.output_dir`, taking episodes other cells
+    ran from the folder `shared` where given; never raises for the cell's own errors, so one bad cell does not stop
+    the sweep."""
     start, cpu_start = time.perf_counter(), time.process_time()
 
     loaded_before = len(_LOADED)
@@ -67,7 +69,7 @@ def run_cell(name: str, cfg: EvalConfig) -> CellOutcome:
         )  # fmt: skip
 
     try:
-        trials = _run(dataclasses.replace(cfg))
+        trials = _run(dataclasses.replace(cfg), shared)
     except UserError as error:
         return outcome("failed", error=str(error))
     except Exception as error:
@@ -77,7 +79,7 @@ def run_cell(name: str, cfg: EvalConfig) -> CellOutcome:
     return outcome("complete", trials)
 
 
-def _run(cfg: EvalConfig) -> int:
+def _run(cfg: EvalConfig, shared: Path | None = None) -> int:
     run_dir = Path(cfg.output_dir)
     cfg.resume = (run_dir / "config.json").is_file()  # an earlier attempt, killed or interrupted, started it
     if cfg.resume and is_complete(run_dir):
@@ -89,7 +91,12 @@ def _run(cfg: EvalConfig) -> int:
     try:
         policy = _policy(cfg, robot, planned.task)
         # The cell runs lanes (--lanes, auto by default), answered from one thread: cells are the sweep's parallelism.
-        evaluation = dataclasses.replace(equipped(cfg, planned, robot, policy, None), verbose=False, lane_threads=1)
+        evaluation = dataclasses.replace(
+            equipped(cfg, planned, robot, policy, None),
+            verbose=False,
+            lane_threads=1,
+            shared_episodes=_shared(cfg, robot, shared),
+        )
         return len(run(evaluation).records)
     finally:
         if robot.is_connected:
@@ -107,6 +114,17 @@ def _policy(cfg: EvalConfig, robot: Robot, task: Task) -> Policy:
     if key not in _LOADED:
         _LOADED[key] = make_policy(cfg.policy, robot, task, cfg.rename_map)
     return _LOADED[key]
+
+
+def _shared(cfg: EvalConfig, robot: Robot, folder: Path | None) -> SharedEpisodes | None:
+    """The episodes shared with other cells, where the instance decides the episode: a simulator whose staging
+    rebuilds its whole state, and a learned policy drawing nothing from the trial's randomness (no action noise,
+    no language blinding)."""
+    learned = policy_entry(cfg.policy, cfg.task).build == PRETRAINED_BUILD
+    whole = getattr(robot, "stages_whole_state", False)
+    if folder is None or not whole or not learned or cfg.policy.noise_std or cfg.policy.language_blind:
+        return None
+    return SharedEpisodes(folder, config_json(cfg))
 
 
 def _node() -> str | None:

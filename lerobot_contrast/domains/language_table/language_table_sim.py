@@ -36,6 +36,9 @@ class LanguageTableSim(SimulatedRobot):
     stageable_objects = board.ALL_BLOCKS
     # Observation keys holding the effector's planar position in the scene frame.
     pose_keys = ("effector.x", "effector.y")
+    # Staging rebuilds the whole world from the scene (zero velocities), so an episode depends on nothing a previous
+    # one left: cells of a sweep may share it (sweep/shared_episodes.py).
+    stages_whole_state = True
 
     def __init__(self, config: LanguageTableSimConfig) -> None:
         super().__init__(config)

@@ -1,0 +1,70 @@
+"""Episodes shared between a sweep's cells (share_episodes: true): every cell's journal is the one it writes without
+sharing, the cells that stage an instance another cell ran take its episode, and only policies whose episodes
+the instance decides share. The cells run in this process, as a Ray worker runs them."""
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from lerobot_contrast.sweep.cells import SweepFileError, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.shared_episodes import FOLDER
+from lerobot_contrast.sweep.worker import run_cell
+
+WALL_CLOCK = ("started_at", "duration_s")
+STUDY = {
+    "eval": {"n_instances": 3, "max_episode_steps": 12, "rerun": False},
+    "grid": {"seed": [4]},
+    "cells": [
+        {"name": "standard", "strategy": "standard"},
+        {"name": "contrast_lb", "strategy": "contrast", "perturbations": ["LB1", "LB2"]},
+        {"name": "contrast_all4", "strategy": "contrast", "perturbations": ["LB1", "LB2", "SB1", "SB2"]},
+    ],
+}
+
+
+def run_study(tmp_path: Path, spec: dict, name: str) -> Path:
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False), encoding="utf-8")
+    out = tmp_path / name
+    for cell in sweep_cells(path, read_sweep_file(path), out):
+        assert run_cell(cell.name, cell.config, cell.shared).status == "complete"
+    return out
+
+
+def journals(out: Path) -> dict[str, list[dict]]:
+    runs = sorted(p.parent for p in out.glob("*/journal.jsonl"))
+    return {
+        run.name: [{k: v for k, v in json.loads(line).items() if k not in WALL_CLOCK} for line in
+                   (run / "journal.jsonl").read_text().splitlines()]
+        for run in runs
+    }  # fmt: skip
+
+
+@pytest.mark.slow
+def test_cells_sharing_episodes_write_the_journals_they_write_alone_and_run_repeated_instances_once(tmp_path):
+    alone = journals(run_study(tmp_path, STUDY, "alone"))
+    shared_out = run_study(tmp_path, {**STUDY, "share_episodes": True}, "shared")
+    assert journals(shared_out) == alone
+    staged = [r for records in alone.values() for r in records if r["status"] in ("done", "aborted")]
+    distinct = {json.dumps(r["instance"], sort_keys=True) for r in staged}
+    ran = list((shared_out / FOLDER).glob("*/*.pkl"))
+    # Each distinct instance ran once; the originals the contrast cells share with the standard cell were taken.
+    assert len(ran) == len(distinct) < len(staged)
+    assert not list((shared_out / FOLDER).glob("*/*.part"))
+
+
+def test_a_policy_that_draws_from_the_trials_randomness_shares_nothing(tmp_path):
+    oracle = {**STUDY, "share_episodes": True, "cells": STUDY["cells"][:1]}
+    oracle["eval"] = {**STUDY["eval"], "n_instances": 2, "max_episode_steps": 5, "policy": {"type": "oracle"}}
+    out = run_study(tmp_path, oracle, "oracle")
+    assert (out / "standard,seed=4" / "journal.jsonl").is_file()
+    assert not (out / FOLDER).exists()
+
+
+def test_share_episodes_takes_true_or_false_in_one_line(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump({**STUDY, "share_episodes": "yes"}), encoding="utf-8")
+    with pytest.raises(SweepFileError, match=r"share_episodes must be true or false, got 'yes'$"):
+        sweep_cells(path, read_sweep_file(path), tmp_path / "out")
