@@ -161,12 +161,14 @@ class LaneRunner:
 
     def _advance(self) -> None:
         """Give idle lanes the next chains, then take one control step on every lane mid-episode."""
+        taken = False
         for lane in self.lanes:
             if lane.observation is None and self.waiting and self._may_run_ahead():
                 self._take_chain(lane, self.waiting.popleft())
+                taken = True
         active = [lane for lane in self.lanes if lane.observation is not None]
-        if not active:
-            if not self.waiting:
+        if not active:  # the chains taken may have ended without a step (episodes shared by a sweep's cells)
+            if not self.waiting and not taken:
                 raise RuntimeError("lanes: a trial was asked for that no chain of the plan holds")
             return
         if self.pool is None or len(active) < 2 * self.policy.min_rows:  # halves below it cost a whole call each

@@ -25,6 +25,7 @@ def test_the_study_is_five_designs_and_an_oracle_calibration_over_three_seeds_of
     learned = [cell for cell in cells if not cell.label.startswith("oracle_")]
     assert all(cell.config.policy.type is None and cell.config.policy.path is None for cell in learned)
     assert all(cell.config.policy.type == "oracle" for cell in cells if cell.label.startswith("oracle_"))
+    assert {cell.shared for cell in cells} == {tmp_path.resolve() / "shared_episodes"}  # repeated originals run once
 
 
 def test_every_design_the_analysis_reads_is_a_cell_of_the_study(tmp_path):
