@@ -1,0 +1,71 @@
+"""The paper's navigation study (scripts/paper_vln.yaml, run and analysed by scripts/reproduce_paper_vln.py): its
+sweep file expands into the designs the analysis reads, its verdicts follow the numbers, and a tiny run writes the
+whole report."""
+
+import importlib.util
+import re
+from pathlib import Path
+
+import pytest
+
+from lerobot_contrast.reporting.stats import Estimate
+from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+
+
+def study_module():
+    spec = importlib.util.spec_from_file_location("reproduce_paper_vln", SCRIPTS / "reproduce_paper_vln.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_scaled_study_is_three_seeds_of_100_sampled_arrangements_and_holds_every_design_it_analyses(tmp_path):
+    path = SCRIPTS / "paper_vln.yaml"
+    cells = sweep_cells(path, read_sweep_file(path), tmp_path)
+    assert {cell.config.seed for cell in cells} == {0, 1, 2}
+    assert all(cell.config.task == "vln" and cell.config.n_instances == 100 for cell in cells)
+    study = study_module()
+    read = {name for pair in study.ERROR_DESIGNS.values() for name in pair}
+    assert {*read, "route_follower_contrast_all4"} <= {cell.label for cell in cells}
+    assert {cell.config.policy.type for cell in cells if cell.label.startswith("route_follower")} == {"route_follower"}
+
+
+def estimate(mean: float, low: float | None = None, high: float | None = None) -> Estimate:
+    return Estimate(mean, mean if low is None else low, mean if high is None else high, 15, 5, "test")
+
+
+def verdict_lines(progress: dict, paired: dict, calibration: dict) -> list[str]:
+    found = {"trials_all4": 40, "trials_standard": 10, "error_all4": 0.02}
+    reset = {"trials_all4": 30, "trials_standard": 10, "error_all4": 0.03}
+    return study_module().verdicts(progress, paired, 0.6, found, reset, calibration)
+
+
+def test_each_finding_holds_when_the_numbers_agree_with_the_paper_and_not_otherwise():
+    paper_like = {"original": 0.6, "L": 0.5, "S": 0.4, "LB": 0.7, "SB": 0.75}
+    paired = {"L": estimate(-0.1, -0.2, -0.01), "S": estimate(-0.2, -0.3, 0.05)}
+    blind = {"L": estimate(0.0), "LB": estimate(0.0)}
+    lines = verdict_lines({k: estimate(v) for k, v in paper_like.items()}, paired, blind)
+    assert len(lines) == 5 and all("**holds**" in line for line in lines)
+    assert "resolved" in lines[1] and "within the interval of no change" in lines[1]
+    assert "ΔLB 0.700 (+17%" in lines[2]
+    reversed_ = {"original": 0.6, "L": 0.7, "S": 0.4, "LB": 0.5, "SB": 0.75}
+    lines = verdict_lines({k: estimate(v) for k, v in reversed_.items()}, {}, {"L": estimate(0.1), "LB": estimate(0)})
+    assert ["**does not hold**" in line for line in lines] == [False, True, True, False, True]
+    tied = {k: estimate(0.6) for k in ("original", "L", "S", "LB", "SB")}
+    assert all("**does not hold**" in line for line in verdict_lines(tied, {}, blind)[1:3])  # a tie is no finding
+
+
+@pytest.mark.slow
+def test_a_tiny_study_writes_the_tables_and_a_verdict_per_finding(tmp_path):
+    study = study_module()
+    args = ["--output_dir", str(tmp_path), "--n_instances", "2", "--seeds", "0", "--repeats", "1"]
+    study.main([*args, "--max_episode_steps", "6", "--num_cpus", "1"])
+    report = (tmp_path / "reproduction.md").read_text(encoding="utf-8")
+    assert "x 1 repeats = 25 trials" in report and "## At scale: 1 seeds x 2 sampled arrangements" in report
+    for row in ("standard evaluation's cost per instance", "trials within 35 m", "contrast, all four, reset seconds"):
+        assert row in report
+    assert report.count("| ΔSB |") == 4  # learned and route follower, paper design and at scale
+    findings = re.findall(r"^\d\. .*\*\*(holds|does not hold)\*\*", report, flags=re.MULTILINE)
+    assert len(findings) == 5
