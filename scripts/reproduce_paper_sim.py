@@ -5,7 +5,8 @@ task families, evaluated by the standard strategy (the full i.i.d. evaluation), 
 contrast strategy with ΔLB1+ΔLB2 (language only), ΔSB1+ΔSB2 (scene only) and all four. Cost: metres blocks are
 moved; metric: SPL. The study is the sweep file
 scripts/paper_sim.yaml, run by the sweep engine (lerobot_contrast.sweep, on Ray): one run directory per
-(strategy, seed), as many at once as the machine has cores.
+(strategy, seed), as many at once as the machine has cores; an episode several designs of a seed stage (the
+originals) runs once and is shared between their cells (share_episodes), their journals unchanged.
 
 Runs are unbudgeted and cut at the standard evaluation's cost in the analysis, as the paper did: its limited
 intervention runs all 250 instances at far lower cost, and its error panel is capped at 300 m "though additional
