@@ -120,6 +120,9 @@ def _check_inputs(config: PreTrainedConfig, features: dict[str, dict], rename_ma
     _check_rename_map(config, features, rename_map)
     provided = {rename_map.get(key, key) for key in features if key != "action"}
     missing = sorted(set(config.input_features) - provided)
+    hint = getattr(config, "missing_input_hint", lambda keys: None)(missing)  # a policy naming the robot's option
+    if missing and hint:
+        raise PolicyLoadError(hint)
     if missing:
         raise PolicyLoadError(
             f"the policy expects {', '.join(missing)}, which the robot does not provide "

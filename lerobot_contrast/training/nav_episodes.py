@@ -80,9 +80,9 @@ class NavSimulator:
 
     def observation(self) -> dict[str, Any]:
         pose = self.world.pose
-        rgb = self.caster.render(self.world.room, self.world.footprints, pose)[0] if self.camera else None
+        rgb, depth = self.caster.render(self.world.room, self.world.footprints, pose) if self.camera else (None, None)
         state = np.array([pose.x, pose.y, pose.yaw, 0.0, 0.0, float(self.world.bumped)], np.float32)
-        return {"image": rgb, "state": state}
+        return {"image": rgb, "depth": depth, "state": state}
 
     def step(self, command: str) -> None:
         if command == "forward":

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from lerobot_policy_vln_navigator.configuration_vln_navigator import COMMANDS
+from lerobot_policy_vln_navigator.configuration_vln_navigator import COMMANDS, DEPTH_KEY
 
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.training.nav_episodes import IMAGE_KEY, NavSimulator
@@ -29,9 +29,11 @@ class NavLearner:
         self.instruction = instance.instruction
 
     def batch(self, observation: dict[str, Any]) -> dict[str, Any]:
-        """What LeRobot's pre-processor hands the policy: a float image in [0, 1], the state, the instruction."""
+        """What LeRobot's pre-processor hands the policy: a float image in [0, 1], depth in metres, the state, the
+        instruction."""
         return {
             IMAGE_KEY: torch.from_numpy(observation["image"]).permute(2, 0, 1).unsqueeze(0).float() / 255,
+            DEPTH_KEY: torch.from_numpy(observation["depth"])[None, None].float(),
             "observation.state": torch.from_numpy(observation["state"]).unsqueeze(0),
             "task": [self.instruction],
         }
@@ -74,6 +76,7 @@ def select_action_ms(learner: NavLearner, instance: Instance) -> float:
     try:
         observation = {
             "image": np.random.default_rng(0).integers(0, 255, (480, 640, 3), dtype=np.uint8),
+            "depth": np.random.default_rng(1).uniform(0.3, 6.0, (480, 640)).astype(np.float32),
             "state": np.zeros(6, np.float32),
         }
         learner.reset(instance)

@@ -14,6 +14,9 @@ from lerobot_contrast.contrast.errors import UserError
 class VLNSimConfig(RobotConfig):
     # Render the ray-cast camera `front`. Scripted policies that read the scene need no image.
     camera: bool = True
+    # With the camera, also give its aligned depth `front_depth` (H, W, 1) in metres, as the LoCoBot's
+    # --robot.use_depth=true does (the learned default of --task=vln reads it).
+    depth: bool = True
     camera_width: int = 640
     camera_height: int = 480
     # One discrete step: forward this many metres, or turn this many degrees (VLN-CE RxR and the paper: 30).

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from navigation_protocol import CAMERA, DISCRETE_KEYS, POSE_KEYS, STATE_KEYS, discrete_command, one_hot
+from navigation_protocol import CAMERA, DEPTH, DISCRETE_KEYS, POSE_KEYS, STATE_KEYS, discrete_command, one_hot
 
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.domains.simulated_robot import SimulatedRobot
@@ -31,6 +31,8 @@ class VLNSim(SimulatedRobot):
         features: dict[str, Any] = dict.fromkeys(STATE_KEYS, float)
         if self.config.camera:
             features[CAMERA] = (self.config.camera_height, self.config.camera_width, 3)
+            if self.config.depth:
+                features[DEPTH] = (self.config.camera_height, self.config.camera_width, 1)
         return features
 
     @property
@@ -39,7 +41,7 @@ class VLNSim(SimulatedRobot):
 
     def _build(self) -> SimBackend:
         apartment = SimBackend(self.config)
-        apartment.configure_camera(self.config.camera_width, self.config.camera_height, depth=False)
+        apartment.configure_camera(self.config.camera_width, self.config.camera_height, depth=self.config.depth)
         return apartment
 
     def get_observation(self) -> dict[str, Any]:
@@ -47,7 +49,10 @@ class VLNSim(SimulatedRobot):
         x, y, theta = apartment.odometry()
         observation: dict[str, Any] = {"odom.x": x, "odom.y": y, "odom.theta": theta, **apartment.state()}
         if self.config.camera:
-            observation[CAMERA] = apartment.images()[1]
+            _, rgb, depth = apartment.images()
+            observation[CAMERA] = rgb
+            if depth is not None:
+                observation[DEPTH] = depth[..., None]
         return observation
 
     def send_action(self, action: dict[str, Any]) -> dict[str, Any]:

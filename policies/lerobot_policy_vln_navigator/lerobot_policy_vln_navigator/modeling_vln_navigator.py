@@ -1,39 +1,38 @@
-"""`VLNNavigatorPolicy`: scan the camera image for furniture, read which two objects the instruction names, remember
-where they were seen, and choose a discrete command.
+"""`VLNNavigatorPolicy`: scan the camera image for furniture, read which two objects the instruction names, map
+obstacles from the depth image and where each object was seen, and plan the next discrete command on that map.
 
-Training (`forward`) supervises the scanner with the simulator's per-column ray hits, the reader with the instance's
-subgoal categories, and the action head with the shortest-path teacher's command given the true goal
-(`observation.privileged.*`). At evaluation the policy sees only the camera image, odometry and the instruction.
+Training (`forward`) supervises the scanner with the simulator's per-column ray hits (class, and range as an
+auxiliary target) and the reader with the instance's subgoal categories (`observation.privileged.*`). At evaluation
+the policy sees only the RGB and depth images, odometry and the instruction.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+import numpy as np
 import torch
 from lerobot.policies import PreTrainedPolicy
 from torch import Tensor
 from torch.nn import functional as F  # noqa: N812
 
 from lerobot_policy_vln_navigator.configuration_vln_navigator import (
-    ACTION_KEY,
     COMMANDS,
+    DEPTH_KEY,
     IMAGE_KEY,
+    MISSING_DEPTH,
     PRIVILEGED_PREFIX,
     STATE_KEY,
     VLNNavigatorConfig,
 )
+from lerobot_policy_vln_navigator.depth import depth_ranges
 from lerobot_policy_vln_navigator.memory import SightMemory
-from lerobot_policy_vln_navigator.network import (
-    ActionHead,
-    ColumnScanner,
-    InstructionReader,
-    column_bearings,
-    goal_features,
-)
+from lerobot_policy_vln_navigator.network import ColumnScanner, InstructionReader, column_bearings
+from lerobot_policy_vln_navigator.occupancy import OccupancyMap, Planner, frontier_cells, goal_cells
 from lerobot_policy_vln_navigator.vocabulary import Tokenizer, build_vocabulary
 
-FORWARD, TURN_LEFT, TURN_RIGHT = (COMMANDS.index(c) for c in ("forward", "turn_left", "turn_right"))
+FORWARD, TURN_LEFT, TURN_RIGHT, STOP = (COMMANDS.index(c) for c in ("forward", "turn_left", "turn_right", "stop"))
 
 
 def resize_image(image: Tensor, height: int, width: int) -> Tensor:
@@ -43,6 +42,10 @@ def resize_image(image: Tensor, height: int, width: int) -> Tensor:
     if image.shape[-2] % height == 0 and image.shape[-1] % width == 0:  # the same means, twice as fast
         return F.avg_pool2d(image, (image.shape[-2] // height, image.shape[-1] // width))
     return F.interpolate(image, size=(height, width), mode="area")
+
+
+class MissingDepthError(ValueError):
+    """The robot gives no aligned depth image."""
 
 
 def _privileged(batch: dict[str, Any], name: str) -> Tensor:
@@ -62,7 +65,7 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
         k = len(config.categories)
         self.scanner = ColumnScanner(k + 1, config.columns, config.channels, config.image_height)
         self.reader = InstructionReader(self.tokenizer.size, k, config.word_dim, config.text_dim)
-        self.head = ActionHead(config.columns, config.head_hidden, len(COMMANDS))
+        self.planner = Planner(config.robot_radius_m, config.clearance_m)
         self.register_buffer("bearings", column_bearings(config.columns, config.hfov_deg), persistent=False)
         self.reset()
 
@@ -74,76 +77,104 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
         self._episode: list[dict[str, Any]] | None = None
 
     def scan(self, batch: dict[str, Any]) -> tuple[Tensor, Tensor]:
-        """Per-column class logits (B, C, K + 1) and ranges in metres (B, C)."""
+        """Per-column class logits (B, C, K + 1) and the learned range head's ranges in metres (B, C), a training
+        target that shapes the scanner's features (the map's ranges come from depth)."""
         image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
         logits, log_range = self.scanner(image)
         return logits, log_range.exp().clamp(max=self.config.max_range_m)
 
+    def obstacle_ranges(self, batch: dict[str, Any]) -> Tensor:
+        """(B, C) range to the nearest obstacle per scan column, from the aligned depth image."""
+        if DEPTH_KEY not in batch:
+            raise MissingDepthError(MISSING_DEPTH)
+        c = self.config
+        band = (c.obstacle_min_m, c.obstacle_max_m)
+        return depth_ranges(batch[DEPTH_KEY], c.hfov_deg, c.camera_height_m, c.columns, band, c.max_range_m)
+
     def read(self, tasks: list[str], device: torch.device) -> tuple[Tensor, Tensor]:
         return self.reader(self.tokenizer(list(tasks), device))
 
-    def _start_episode(self, batch: dict[str, Any], device: torch.device) -> list[dict[str, Any]]:
+    def _start_episode(self, batch: dict[str, Any], state: np.ndarray, device: torch.device) -> list[dict[str, Any]]:
         first, final = self.read(batch["task"], device)
         return [
             {
                 "memory": SightMemory(len(self.config.categories), self.config.memory_points),
+                "map": OccupancyMap((float(state[i, 0]), float(state[i, 1])), self.config.map_resolution_m),
                 "targets": (int(first[i].argmax()), int(final[i].argmax())),
                 "phase": 0,
                 "searched": 0,
-                "explored": 0,
             }
             for i in range(first.shape[0])
         ]
 
     @torch.no_grad()
     def select_action(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
-        state = batch[STATE_KEY].float().cpu()
-        logits, ranges = self.scan(batch)
+        state = batch[STATE_KEY].float().cpu().numpy().astype(np.float64)
+        ranges = self.obstacle_ranges(batch)
+        image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
+        logits = self.scanner.classify(image)
         if self._episode is None or len(self._episode) != state.shape[0]:
-            self._episode = self._start_episode(batch, logits.device)
-        probs = logits.softmax(-1).cpu()
-        confidence, classes = probs.max(-1)
+            self._episode = self._start_episode(batch, state, logits.device)
+        confidence, classes = (t.numpy() for t in logits.softmax(-1).cpu().max(-1))
+        bearings, scans = self.bearings.cpu().numpy().astype(np.float64), ranges.cpu().numpy().astype(np.float64)
+        # Up close an object fills the view and the scanner's class is least sure: where a subgoal is comes from
+        # sightings at least `near_m` away.
         keep = (classes < len(self.config.categories)) & (confidence >= self.config.seen_confidence)
+        keep &= scans >= self.config.near_m
         actions = torch.zeros(state.shape[0], len(COMMANDS))
         for i, episode in enumerate(self._episode):
-            scan = ranges[i].cpu()
-            episode["memory"].add(state[i, :3], self.bearings.cpu(), scan, classes[i], keep[i])
-            actions[i, self._command(episode, state[i], scan)] = 1.0
+            pose = state[i, :3]
+            episode["memory"].add(pose, bearings, scans[i], classes[i], keep[i])
+            episode["map"].add_scan(pose, bearings, scans[i], self.config.max_range_m)
+            if state[i, 5] > 0.5:
+                episode["map"].add_bump(pose, self.config.robot_radius_m + 0.05)
+            actions[i, self._command(episode, pose)] = 1.0
         return actions.to(logits.device)
 
-    def _command(self, episode: dict[str, Any], state: Tensor, scan: Tensor) -> int:
-        """The next command for one robot: look around until the current subgoal is seen, then the action head."""
-        memory, targets = episode["memory"], episode["targets"]
-        goal = memory.nearest(targets[episode["phase"]], state[:3])
-        if episode["phase"] == 0 and goal is not None and (goal[0] ** 2 + goal[1] ** 2) ** 0.5 <= self.config.reach_m:
+    def _command(self, episode: dict[str, Any], pose: np.ndarray) -> int:
+        """The next command for one robot: plan on the map to where the current subgoal was seen (after the first,
+        the final one, stopping there); while it is unseen, look around, then explore the map's frontier."""
+        grid, targets = episode["map"], episode["targets"]
+        window = self.planner.window(grid, pose)
+        here = tuple(int(v[0]) - w.start for v, w in zip(grid.cells(pose[None, :2]), window, strict=True))
+        if episode["phase"] == 0 and self._reached(episode, window, here, targets[0]):
             episode["phase"] = 1
-            goal = memory.nearest(targets[1], state[:3])
-        if goal is None:
-            return self._explore(episode, scan)
-        known = torch.tensor([0.0 if goal is None else 1.0])
-        dx, dy = (0.0, 0.0) if goal is None else goal
-        features = goal_features(torch.tensor([dx]), torch.tensor([dy]), known)
-        final = torch.tensor([float(episode["phase"])])
-        logits = self.head(features, final, self._scan_input(scan.unsqueeze(0)), state[5:6])
-        return int(logits.argmax(-1))
+        if episode["phase"] == 1 and self._reached(episode, window, here, targets[1]):
+            return STOP
+        goals = self._goals(episode, window, episode["memory"].points(targets[episode["phase"]]))
+        if goals is None:
+            if episode["searched"] < self.config.search_turns:
+                episode["searched"] += 1
+                return TURN_LEFT
+            goals = frontier_cells(grid, window)
+        return self._steer(grid, window, self.planner.field(grid, window, goals), pose)
 
-    def _explore(self, episode: dict[str, Any], scan: Tensor) -> int:
-        """The subgoal has not been seen: look around, then head for open floor (the scanner's farthest ranges) and
-        look around again every `explore_steps` steps."""
-        if episode["searched"] < self.config.search_turns:
-            episode["searched"] += 1
+    def _goals(self, episode: dict[str, Any], window: tuple[slice, slice], points: np.ndarray) -> np.ndarray | None:
+        """Cells of `window` within reach of where `points` gather, or None while there are none."""
+        goals = goal_cells(episode["map"], window, points, self.config.reach_m) if len(points) else None
+        return goals if goals is not None and goals.any() else None
+
+    def _reached(self, episode: dict[str, Any], window: tuple[slice, slice], here: tuple[int, int], k: int) -> bool:
+        """Whether the robot is within reach of category `k` as seen from near (far sightings place it too loosely)."""
+        goals = self._goals(episode, window, episode["memory"].points(k, self.config.confirm_m))
+        return goals is not None and bool(goals[here])
+
+    def _steer(self, grid: OccupancyMap, window: tuple[slice, slice], field: np.ndarray, pose: np.ndarray) -> int:
+        """Of the twelve headings a 30-degree turn reaches, the one whose look-ahead point has the lowest cost-to-go:
+        forward when it is the current heading (or as good), else turn towards it."""
+        headings = pose[2] + np.arange(12) * math.radians(30.0)
+        ahead = pose[None, :2] + self.config.lookahead_m * np.stack([np.cos(headings), np.sin(headings)], -1)
+        rows, cols = grid.cells(ahead)
+        rows, cols = rows - window[0].start, cols - window[1].start
+        inside = (rows >= 0) & (rows < field.shape[0]) & (cols >= 0) & (cols < field.shape[1])
+        rows, cols = np.clip(rows, 0, field.shape[0] - 1), np.clip(cols, 0, field.shape[1] - 1)
+        costs = np.where(inside, field[rows, cols], np.inf)
+        best = int(np.argmin(costs))
+        if not np.isfinite(costs[best]):
             return TURN_LEFT
-        episode["explored"] += 1
-        if episode["explored"] % self.config.explore_steps == 0:
-            episode["searched"] = 0
-        half = len(scan) // 2
-        ahead = float(scan[half - 2 : half + 2].min())
-        if ahead > self.config.open_m:
+        if costs[0] <= costs[best] + 1e-6:
             return FORWARD
-        return TURN_LEFT if float(scan[:half].mean()) >= float(scan[half:].mean()) else TURN_RIGHT
-
-    def _scan_input(self, ranges: Tensor) -> Tensor:
-        return ranges / self.config.max_range_m
+        return TURN_LEFT if best <= 6 else TURN_RIGHT
 
     def predict_action_chunk(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
         return self.select_action(batch).unsqueeze(1)
@@ -158,20 +189,6 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
             "scan_range": (ranges.clamp(min=0.05).log() - truth_range.log()).abs().mean(),
             "first": F.cross_entropy(first, _privileged(batch, "first").argmax(-1)),
             "final": F.cross_entropy(final, _privileged(batch, "final").argmax(-1)),
-            "action": self._action_loss(batch, ranges.detach(), truth_range),
         }
         accuracy = (logits.argmax(-1) == truth_class).float().mean()
         return sum(losses.values()), {**{k: v.item() for k, v in losses.items()}, "scan_accuracy": accuracy.item()}
-
-    def _action_loss(self, batch: dict[str, Any], predicted: Tensor, truth: Tensor) -> Tensor:
-        """The head learns from the true goal (with noise, sometimes hidden) and the true or the predicted scan."""
-        goal = _privileged(batch, "goal")
-        b = goal.shape[0]
-        noise = self.config.goal_noise_m * torch.randn(b, 2, device=goal.device)
-        known = (torch.rand(b, device=goal.device) >= self.config.unseen_rate).float()
-        features = goal_features(goal[:, 0] + noise[:, 0], goal[:, 1] + noise[:, 1], known)
-        use_predicted = torch.rand(b, 1, device=goal.device) < self.config.predicted_scan_rate
-        scan = self._scan_input(torch.where(use_predicted, predicted, truth))
-        bumper = batch[STATE_KEY][:, 5].float()
-        logits = self.head(features, _privileged(batch, "phase").view(-1), scan, bumper)
-        return F.cross_entropy(logits, batch[ACTION_KEY].float().argmax(-1))

@@ -1,4 +1,4 @@
-"""The navigator's learned parts: a column scanner over the camera image, an instruction reader, an action head."""
+"""The navigator's learned parts: a column scanner over the camera image and an instruction reader."""
 
 from __future__ import annotations
 
@@ -7,26 +7,12 @@ import math
 import torch
 from torch import Tensor, nn
 
-# Goal features fed to the action head: (dx, dy) in the robot frame and the distance (all / GOAL_SCALE_M),
-# the bearing's cosine and sine, and whether the goal has been seen at all.
-GOAL_FEATURES = 6
-GOAL_SCALE_M = 4.0
-
 
 def column_bearings(columns: int, hfov_deg: float) -> Tensor:
     """Bearing (radians, left positive) of each scan column's centre for a pinhole camera."""
     focal = (columns / 2) / math.tan(math.radians(hfov_deg) / 2)
     u = torch.arange(columns, dtype=torch.float32) + 0.5
     return torch.atan((columns / 2 - u) / focal)
-
-
-def goal_features(dx: Tensor, dy: Tensor, known: Tensor) -> Tensor:
-    """(B, GOAL_FEATURES) from a goal at (dx, dy) metres in the robot frame (x ahead, y left); zeros if unknown."""
-    distance = torch.sqrt(dx**2 + dy**2).clamp(min=1e-6)
-    features = torch.stack(
-        [dx / GOAL_SCALE_M, dy / GOAL_SCALE_M, distance / GOAL_SCALE_M, dx / distance, dy / distance], -1
-    )
-    return torch.cat([features * known.unsqueeze(-1), known.unsqueeze(-1)], -1)
 
 
 class ColumnScanner(nn.Module):
@@ -56,12 +42,18 @@ class ColumnScanner(nn.Module):
         self.classes = nn.Conv1d(2 * c, classes, 1)
         self.range = nn.Conv1d(2 * c, 1, 1)
 
-    def forward(self, image: Tensor) -> tuple[Tensor, Tensor]:
+    def features(self, image: Tensor) -> Tensor:
         x = self.convs(image)
         b, c, h, w = x.shape
-        x = x.reshape(b, c * h, w)
-        x = nn.functional.adaptive_avg_pool1d(x, self.columns)
-        x = self.mix(x)
+        x = nn.functional.adaptive_avg_pool1d(x.reshape(b, c * h, w), self.columns)
+        return self.mix(x)
+
+    def classify(self, image: Tensor) -> Tensor:
+        """Class logits (B, C, K + 1) alone (what `select_action` uses)."""
+        return self.classes(self.features(image)).transpose(1, 2)
+
+    def forward(self, image: Tensor) -> tuple[Tensor, Tensor]:
+        x = self.features(image)
         return self.classes(x).transpose(1, 2), self.range(x)[:, 0]
 
 
@@ -79,20 +71,3 @@ class InstructionReader(nn.Module):
         out, _ = self.gru(self.embed(ids))
         last = out[torch.arange(ids.shape[0]), (ids > 0).sum(1).clamp(min=1) - 1]  # the state after the last word
         return self.first(last), self.final(last)
-
-
-class ActionHead(nn.Module):
-    """(goal features, which subgoal, range scan, bumper) -> logits over the four commands."""
-
-    def __init__(self, columns: int, hidden: int, commands: int) -> None:
-        super().__init__()
-        self.net = nn.Sequential(
-            nn.Linear(GOAL_FEATURES + 2 + columns, hidden),
-            nn.ReLU(),
-            nn.Linear(hidden, hidden),
-            nn.ReLU(),
-            nn.Linear(hidden, commands),
-        )
-
-    def forward(self, goal: Tensor, final: Tensor, scan: Tensor, bumper: Tensor) -> Tensor:
-        return self.net(torch.cat([goal, final.unsqueeze(-1), scan, bumper.unsqueeze(-1)], -1))

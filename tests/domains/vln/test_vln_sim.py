@@ -9,7 +9,7 @@ import sys
 
 import numpy as np
 import pytest
-from navigation_protocol import CAMERA, DISCRETE_KEYS, STATE_KEYS, one_hot
+from navigation_protocol import CAMERA, DEPTH, DISCRETE_KEYS, STATE_KEYS, one_hot
 
 from lerobot_contrast.domains.vln import VLNTask
 from lerobot_contrast.domains.vln.config_vln_sim import VLNSimConfig
@@ -33,10 +33,12 @@ def run_episode(robot, instance):
 def test_the_robot_has_the_locobot_features_and_steps_at_once(tmp_path):
     robot = VLNSim(VLNSimConfig(camera_width=64, camera_height=48, calibration_dir=tmp_path))
     assert robot.action_features == dict.fromkeys(DISCRETE_KEYS, float)
-    assert set(robot.observation_features) == {*STATE_KEYS, CAMERA}
+    assert set(robot.observation_features) == {*STATE_KEYS, CAMERA, DEPTH}
+    assert set(VLNSim(VLNSimConfig(depth=False)).observation_features) == {*STATE_KEYS, CAMERA}
     robot.connect()
     start = robot.get_observation()
     assert start[CAMERA].shape == (48, 64, 3) and start[CAMERA].dtype == np.uint8
+    assert start[DEPTH].shape == (48, 64, 1) and start[DEPTH].dtype == np.float32 and 0 < start[DEPTH].min() < 10
     robot.send_action(one_hot("turn_left"))
     assert robot.get_observation()["odom.theta"] == pytest.approx(start["odom.theta"] + np.radians(30))
     assert robot.send_action(one_hot(None)) == one_hot(None) and not robot.stop_requested
