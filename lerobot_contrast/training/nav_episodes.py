@@ -104,7 +104,7 @@ class NavSimulator:
             observation = self.observation()
             executed = actor.act(observation, label)
             if record is not None:
-                record(self._frame(instance, teacher, pose, phase, observation, label))
+                record(self._frame(instance, teacher, pose, observation, label))
             if executed == "stop":
                 break
             self.step(executed)
@@ -118,8 +118,8 @@ class NavSimulator:
         spl = float(judgement.success) * reference / max(length, reference, 1e-9)
         return Outcome(judgement.success, judgement.progress, spl, steps)
 
-    def _frame(self, instance, teacher: Teacher, pose: Pose, phase: int, observation, label: str) -> dict:
-        targets = teacher.targets(pose, phase)
+    def _frame(self, instance, teacher: Teacher, pose: Pose, observation, label: str) -> dict:
+        targets = teacher.targets(pose)
         return {
             IMAGE_KEY: small_image(observation["image"]),
             "observation.state": observation["state"],

@@ -50,7 +50,6 @@ class Teacher:
             if fields is not None:
                 break
         self.grid, self.fields = grid, fields
-        self.outlines = [self.footprints.sample_points(self.footprints.index(n), 0.05) for n in self.subgoals]
 
     def _fields(self, grid: Grid) -> list[np.ndarray] | None:
         """Cost-to-go (metres) to finish from every cell: [while the first subgoal is ahead, after it]."""
@@ -95,7 +94,7 @@ class Teacher:
                 return math.inf
         return float(field[row, col])
 
-    def targets(self, pose: Pose, phase: int) -> dict[str, np.ndarray]:
+    def targets(self, pose: Pose) -> dict[str, np.ndarray]:
         """The privileged targets of a frame at `pose` (see `features`)."""
         origin = np.array([pose.x, pose.y])
         angles = pose.yaw + column_bearings(SCAN_COLUMNS, HFOV_DEG).numpy().astype(np.float64)
@@ -107,9 +106,6 @@ class Teacher:
         hit = t_in[np.arange(len(dirs)), nearest]
         classes = np.array([category_index(self.footprints.names[i]) for i in nearest])
         column_class = np.where(hit < wall_t, classes, WALL)
-        outline = self.outlines[phase]
-        closest = outline[np.linalg.norm(outline - origin, axis=1).argmin()] - origin
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         first, final = np.zeros(WALL, np.float32), np.zeros(WALL, np.float32)
         first[category_index(self.subgoals[0])] = 1.0
         final[category_index(self.subgoals[1])] = 1.0
@@ -118,13 +114,10 @@ class Teacher:
             "column_range": np.minimum(hit, wall_t).astype(np.float32),
             "first": first,
             "final": final,
-            "goal": np.array([c * closest[0] + s * closest[1], -s * closest[0] + c * closest[1]], np.float32),
-            "phase": np.array([phase], np.float32),
         }
 
 
 SHAPES = {"column_class": (SCAN_COLUMNS,), "column_range": (SCAN_COLUMNS,), "first": (WALL,), "final": (WALL,)}
-SHAPES.update({"goal": (2,), "phase": (1,)})
 
 
 def one_hot(command: str) -> np.ndarray:

@@ -65,8 +65,6 @@ def test_forward_trains_every_head_from_privileged_targets_that_are_never_inputs
         PRIVILEGED_PREFIX + "column_range": torch.rand(b, 32) * 5 + 0.2,
         PRIVILEGED_PREFIX + "first": torch.eye(10)[[0] * b],
         PRIVILEGED_PREFIX + "final": torch.eye(10)[[4] * b],
-        PRIVILEGED_PREFIX + "goal": torch.randn(b, 2),
-        PRIVILEGED_PREFIX + "phase": torch.zeros(b, 1),
     }
     loss, figures = policy.forward(batch)
     loss.backward()
@@ -107,7 +105,7 @@ def test_obstacle_ranges_from_depth_agree_with_the_simulators_ray_hits():
     for instance in FIXED[:2]:
         start = Pose.from_json(instance.goal["start"])
         simulator.world.set_scene(instance.scene.objects, start)
-        truth = np.minimum(Teacher(instance).targets(start, 0)["column_range"], 8.0)
+        truth = np.minimum(Teacher(instance).targets(start)["column_range"], 8.0)
         ranges = learner.policy.obstacle_ranges(learner.batch(simulator.observation()))[0].numpy()
         errors.append(np.abs(ranges - truth) / truth)
     # Per column the depth range is the nearest over the column's strip, the truth the ray through its centre.
