@@ -11,7 +11,7 @@ cannot change what it does (and it runs without rendering the camera it does not
 
 Usage: python scripts/reproduce_paper_vln.py [--output_dir outputs/paper_vln] [--seeds 0 1 2] [--n_instances 100]
        [--num_cpus N] [--paper_only] [--repeats 3] [--max_episode_steps N]
-Writes OUTPUT_DIR/runs/..., OUTPUT_DIR/report_*/ and OUTPUT_DIR/reproduction.md (the table beside the paper's
+Writes OUTPUT_DIR/runs/... (a run per cell) and OUTPUT_DIR/reproduction.md (the table beside the paper's
 figures, and a verdict per finding). Re-running resumes or skips finished runs. The last line is
 `wall_s=... standard_cost_per_instance_m=... perturbation_cost_per_base_m=... ...` name=value pairs.
 """
@@ -96,12 +96,15 @@ def costs(runs_standard: list, runs_contrast: list) -> dict[str, float]:
     """Standard cost per instance, perturbation cost per base, and trials within the paper's 35 m budget."""
     from lerobot_contrast.reporting import stats
 
-    per_instance = [stats.total_cost(r.results) / max(1, len(stats.done(r.results))) for r in runs_standard]
+    # Per instance and per base, not per trial: a repeat restages the same scene for nothing.
+    per_instance = [
+        stats.total_cost(r.results) / max(1, stats.frame(r.results)["base_id"].nunique()) for r in runs_standard
+    ]
     per_base = []
     for run in runs_contrast:
         df = stats.done(stats.frame(run.results))
         perturbed = df[df["perturbation"].notna()]
-        per_base.append(perturbed["cost"].sum() / max(1, df["perturbation"].isna().sum()))
+        per_base.append(perturbed["cost"].sum() / max(1, df["base_id"].nunique()))
     return {
         "standard_per_instance": float(np.mean(per_instance)),
         "perturbation_per_base": float(np.mean(per_base)),
