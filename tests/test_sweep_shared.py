@@ -69,3 +69,15 @@ def test_share_episodes_takes_true_or_false_in_one_line(tmp_path):
     path.write_text(yaml.safe_dump({**STUDY, "share_episodes": "yes"}), encoding="utf-8")
     with pytest.raises(SweepFileError, match=r"share_episodes must be true or false, got 'yes'$"):
         sweep_cells(path, read_sweep_file(path), tmp_path / "out")
+
+
+def test_weights_retrained_at_the_same_path_share_no_episodes_with_the_old_ones():
+    torch = pytest.importorskip("torch")
+    from lerobot_contrast.sweep.shared_episodes import weights_digest
+
+    net = torch.nn.Linear(3, 2)
+    before = weights_digest(net)
+    assert weights_digest(net) == before
+    with torch.no_grad():
+        net.bias[0] += 1e-6
+    assert weights_digest(net) != before

@@ -17,8 +17,19 @@ from lerobot_contrast.contrast.trial import TrialContext
 
 # The settings an episode depends on besides its instance; the rest (strategy, seed, budget...) only decide which
 # instances a cell stages, and the instance is in the key.
-EPISODE_SETTINGS = ("task", "max_episode_steps", "max_episode_s", "policy", "robot", "fps", "operator", "rename_map")
+EPISODE_SETTINGS = (
+    "task", "max_episode_steps", "max_episode_s", "policy", "robot", "fps", "operator", "rename_map", "weights",
+)  # fmt: skip
 FOLDER = "shared_episodes"
+
+
+def weights_digest(module: Any) -> str:
+    """A digest of a torch module's parameters and buffers: the weights themselves, not the path they came from."""
+    digest = hashlib.sha256()
+    for name, tensor in sorted(module.state_dict().items()):
+        digest.update(name.encode())
+        digest.update(tensor.detach().cpu().double().numpy().tobytes())  # any dtype, exactly
+    return digest.hexdigest()
 
 
 class SharedEpisodes:

@@ -22,7 +22,7 @@ from lerobot_contrast.policies import PRETRAINED_BUILD, Policy, make_policy, pol
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.sweep_dir import is_complete
-from lerobot_contrast.sweep.shared_episodes import SharedEpisodes
+from lerobot_contrast.sweep.shared_episodes import SharedEpisodes, weights_digest
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
@@ -95,7 +95,7 @@ def _run(cfg: EvalConfig, shared: Path | None = None) -> int:
             equipped(cfg, planned, robot, policy, None),
             verbose=False,
             lane_threads=1,
-            shared_episodes=_shared(cfg, robot, shared),
+            shared_episodes=_shared(cfg, robot, policy, shared),
         )
         return len(run(evaluation).records)
     finally:
@@ -116,15 +116,16 @@ def _policy(cfg: EvalConfig, robot: Robot, task: Task) -> Policy:
     return _LOADED[key]
 
 
-def _shared(cfg: EvalConfig, robot: Robot, folder: Path | None) -> SharedEpisodes | None:
+def _shared(cfg: EvalConfig, robot: Robot, policy: Policy, folder: Path | None) -> SharedEpisodes | None:
     """The episodes shared with other cells, where the instance decides the episode: a simulator whose staging
     rebuilds its whole state, and a learned policy drawing nothing from the trial's randomness (no action noise,
-    no language blinding)."""
+    no language blinding). They are keyed by the weights too, so weights retrained at the same path share nothing
+    with the old ones."""
     learned = policy_entry(cfg.policy, cfg.task).build == PRETRAINED_BUILD
     whole = getattr(robot, "stages_whole_state", False)
     if folder is None or not whole or not learned or cfg.policy.noise_std or cfg.policy.language_blind:
         return None
-    return SharedEpisodes(folder, config_json(cfg))
+    return SharedEpisodes(folder, config_json(cfg) | {"weights": weights_digest(policy.policy)})
 
 
 def _node() -> str | None:
