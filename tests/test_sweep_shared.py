@@ -56,6 +56,24 @@ def test_cells_sharing_episodes_write_the_journals_they_write_alone_and_run_repe
     assert not list((shared_out / FOLDER).glob("*/*.part"))
 
 
+@pytest.mark.slow
+def test_the_apartments_cells_share_episodes_with_the_journals_they_write_alone(tmp_path):
+    apartment = {
+        "eval": {"task": "vln", "n_instances": 2, "max_episode_steps": 10, "rerun": False,
+                 "robot": {"type": "vln_sim", "camera_width": 160, "camera_height": 120}},
+        "grid": {"seed": [1]},
+        "cells": [
+            {"name": "contrast_all4", "strategy": "contrast", "perturbations": ["L", "LB", "S", "SB"]},
+            {"name": "standard_reset", "strategy": "standard", "cost": "reset_time"},
+        ],
+    }  # fmt: skip
+    alone = journals(run_study(tmp_path, apartment, "alone"))
+    shared_out = run_study(tmp_path, {**apartment, "share_episodes": True}, "shared")
+    assert journals(shared_out) == alone
+    staged = [r for records in alone.values() for r in records if r["status"] in ("done", "aborted")]
+    assert len(list((shared_out / FOLDER).glob("*/*.pkl"))) < len(staged)
+
+
 def test_a_policy_that_draws_from_the_trials_randomness_shares_nothing(tmp_path):
     oracle = {**STUDY, "share_episodes": True, "cells": STUDY["cells"][-1:]}
     oracle["eval"] = {**STUDY["eval"], "n_instances": 2, "max_episode_steps": 5, "policy": {"type": "oracle"}}

@@ -21,6 +21,8 @@ class VLNSim(SimulatedRobot):
     config_class = VLNSimConfig
     name = "vln_sim"
     pose_keys = POSE_KEYS
+    # Staging places every piece of furniture and the robot and stills it: a sweep may share its episodes.
+    stages_whole_state = True
 
     def __init__(self, config: VLNSimConfig) -> None:
         super().__init__(config)
