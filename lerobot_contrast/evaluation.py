@@ -80,7 +80,7 @@ class Evaluation:
     lanes: int = 1  # simulated chains of trials run side by side (lane_runner.py), with the same results as one
     policy_for: Callable[[Any], Policy] | None = None  # the policy for another lane's robot (None: a copy)
     lane_threads: int = 1  # threads that answer the lanes (lane_choice.lane_threads)
-    shared_episodes: Any = None  # episodes shared with a sweep's other cells (sweep/shared_episodes.py)
+    shared_episodes: Any = None  # episodes shared with a sweep's other cells (record/shared_episodes.py)
 
     @property
     def settings(self) -> dict[str, Any]:

@@ -29,7 +29,7 @@ from lerobot_contrast.record.observer import EpisodeObserver
 if TYPE_CHECKING:
     from lerobot.robots import Robot
 
-    from lerobot_contrast.sweep.shared_episodes import SharedEpisodes
+    from lerobot_contrast.record.shared_episodes import SharedEpisodes
 
 # How an episode can end without a label: the operator stopped the robot, or the robot went away.
 ABORTS = ("estop", "disconnected")
@@ -120,7 +120,7 @@ class RobotRunner:
             if staging.action == "skip":
                 return _skipped(context)
             shared = self.shared.get(context) if self._shares else None
-            if shared is not None:  # another cell ran this very episode (sweep/shared_episodes.py)
+            if shared is not None:  # another cell ran this very episode (record/shared_episodes.py)
                 episode, scene_after = shared
             else:
                 episode = yield from self._run_episode(context)

@@ -7,6 +7,7 @@ import re
 from pathlib import Path
 
 import pytest
+import ray
 
 from lerobot_contrast.reporting.stats import Estimate
 from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
@@ -61,7 +62,10 @@ def test_each_finding_holds_when_the_numbers_agree_with_the_paper_and_not_otherw
 def test_a_tiny_study_writes_the_tables_and_a_verdict_per_finding(tmp_path):
     study = study_module()
     args = ["--output_dir", str(tmp_path), "--n_instances", "2", "--seeds", "0", "--repeats", "1"]
-    study.main([*args, "--max_episode_steps", "6", "--num_cpus", "1"])
+    try:
+        study.main([*args, "--max_episode_steps", "6", "--num_cpus", "1"])
+    finally:
+        ray.shutdown()  # the study joins a local Ray in this process; later tests in it start their own
     report = (tmp_path / "reproduction.md").read_text(encoding="utf-8")
     assert "x 1 repeats = 25 trials" in report and "## At scale: 1 seeds x 2 sampled arrangements" in report
     for row in ("standard evaluation's cost per instance", "trials within 35 m", "contrast, all four, reset seconds"):

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from lerobot_contrast.record.shared_episodes import FOLDER
 from lerobot_contrast.sweep.cells import SweepFileError, read_sweep_file, sweep_cells
-from lerobot_contrast.sweep.shared_episodes import FOLDER
 from lerobot_contrast.sweep.worker import run_cell
 
 WALL_CLOCK = ("started_at", "duration_s")
@@ -91,7 +91,7 @@ def test_share_episodes_takes_true_or_false_in_one_line(tmp_path):
 
 def test_weights_retrained_at_the_same_path_share_no_episodes_with_the_old_ones():
     torch = pytest.importorskip("torch")
-    from lerobot_contrast.sweep.shared_episodes import weights_digest
+    from lerobot_contrast.record.shared_episodes import weights_digest
 
     net = torch.nn.Linear(3, 2)
     before = weights_digest(net)

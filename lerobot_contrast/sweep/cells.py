@@ -17,7 +17,7 @@ import yaml
 from lerobot_contrast.build import TASK_ROBOTS, choose_robot, register_robots
 from lerobot_contrast.config import ConfigError, EvalConfig
 from lerobot_contrast.flags import flag_names, flag_types
-from lerobot_contrast.sweep.shared_episodes import FOLDER
+from lerobot_contrast.record.shared_episodes import FOLDER
 
 FILE_KEYS = ("output_dir", "eval", "grid", "cells", "share_episodes")
 # Settings the sweep decides for every cell: where it is written, whether it resumes, who stages its scenes.

@@ -21,8 +21,8 @@ from lerobot_contrast.evaluation import run
 from lerobot_contrast.policies import PRETRAINED_BUILD, Policy, make_policy, policy_entry
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.journal import read_journal
+from lerobot_contrast.record.shared_episodes import SharedEpisodes, weights_digest
 from lerobot_contrast.record.sweep_dir import is_complete
-from lerobot_contrast.sweep.shared_episodes import SharedEpisodes, weights_digest
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot

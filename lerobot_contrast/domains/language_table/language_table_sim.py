@@ -37,7 +37,7 @@ class LanguageTableSim(SimulatedRobot):
     # Observation keys holding the effector's planar position in the scene frame.
     pose_keys = ("effector.x", "effector.y")
     # Staging rebuilds the whole world from the scene (zero velocities), so an episode depends on nothing a previous
-    # one left: cells of a sweep may share it (sweep/shared_episodes.py).
+    # one left: cells of a sweep may share it (record/shared_episodes.py).
     stages_whole_state = True
 
     def __init__(self, config: LanguageTableSimConfig) -> None:
