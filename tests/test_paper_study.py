@@ -1,19 +1,12 @@
 """The paper's study (scripts/paper_sim.yaml, analysed by scripts/reproduce_paper_sim.py) stays runnable: its sweep
 file expands into valid simulated cells of the learned default, and every design the analysis reads is in it."""
 
-import importlib.util
-from pathlib import Path
-
 from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
-
-SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+from tests.study_scripts import SCRIPTS, load_script
 
 
 def analysis_module():
-    spec = importlib.util.spec_from_file_location("reproduce_paper_sim", SCRIPTS / "reproduce_paper_sim.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("reproduce_paper_sim")
 
 
 def test_the_study_is_five_designs_and_an_oracle_calibration_over_three_seeds_of_the_learned_default(tmp_path):

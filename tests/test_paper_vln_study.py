@@ -2,24 +2,18 @@
 sweep file expands into the designs the analysis reads, its verdicts follow the numbers, and a tiny run writes the
 whole report."""
 
-import importlib.util
 import re
-from pathlib import Path
 
 import pytest
 import ray
 
 from lerobot_contrast.reporting.stats import Estimate
 from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
-
-SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+from tests.study_scripts import SCRIPTS, load_script
 
 
 def study_module():
-    spec = importlib.util.spec_from_file_location("reproduce_paper_vln", SCRIPTS / "reproduce_paper_vln.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("reproduce_paper_vln")
 
 
 def test_the_scaled_study_is_three_seeds_of_100_sampled_arrangements_and_holds_every_design_it_analyses(tmp_path):
