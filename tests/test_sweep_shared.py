@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from lerobot_contrast.record.shared_episodes import FOLDER
-from lerobot_contrast.sweep.cells import SweepFileError, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import SweepFileError, read_sweep_file, sharing_predecessors, sweep_cells
 from lerobot_contrast.sweep.worker import run_cell
 
 WALL_CLOCK = ("started_at", "duration_s")
@@ -80,6 +80,23 @@ def test_a_policy_that_draws_from_the_trials_randomness_shares_nothing(tmp_path)
     out = run_study(tmp_path, oracle, "oracle")
     assert (out / "standard,seed=4" / "journal.jsonl").is_file()
     assert not (out / FOLDER).exists()
+
+
+def test_cells_that_would_share_episodes_run_one_after_another_and_the_rest_at_once(tmp_path):
+    spec = {**STUDY, "grid": {"seed": [4, 5]}}
+    spec["cells"] = [*STUDY["cells"], {"name": "other_policy", "strategy": "standard", "policy": {"type": "oracle"}}]
+    path = tmp_path / "study.yaml"
+    path.write_text(yaml.safe_dump({**spec, "share_episodes": True}), encoding="utf-8")
+    after = sharing_predecessors(sweep_cells(path, read_sweep_file(path), tmp_path / "out"))
+    # Per seed, each cell of the same policy waits for the one before it in the file; seeds and policies apart.
+    assert after == {
+        "contrast_all4,seed=4": None, "contrast_all4,seed=5": None,
+        "contrast_lb,seed=4": "contrast_all4,seed=4", "contrast_lb,seed=5": "contrast_all4,seed=5",
+        "standard,seed=4": "contrast_lb,seed=4", "standard,seed=5": "contrast_lb,seed=5",
+        "other_policy,seed=4": None, "other_policy,seed=5": None,
+    }  # fmt: skip
+    path.write_text(yaml.safe_dump(spec), encoding="utf-8")
+    assert set(sharing_predecessors(sweep_cells(path, read_sweep_file(path), tmp_path / "out")).values()) == {None}
 
 
 def test_share_episodes_takes_true_or_false_in_one_line(tmp_path):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import difflib
 import hashlib
 import itertools
+import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,9 +16,9 @@ import draccus
 import yaml
 
 from lerobot_contrast.build import TASK_ROBOTS, choose_robot, register_robots
-from lerobot_contrast.config import ConfigError, EvalConfig
+from lerobot_contrast.config import ConfigError, EvalConfig, config_json
 from lerobot_contrast.flags import flag_names, flag_types
-from lerobot_contrast.record.shared_episodes import FOLDER
+from lerobot_contrast.record.shared_episodes import EPISODE_SETTINGS, FOLDER
 
 FILE_KEYS = ("output_dir", "eval", "grid", "cells", "share_episodes")
 # Settings the sweep decides for every cell: where it is written, whether it resumes, who stages its scenes.
@@ -177,3 +178,25 @@ def sweep_cells(path: Path, spec: dict[str, Any], output_dir: Path) -> list[Cell
         cfg.output_dir = output_dir.resolve() / name
         cells.append(Cell(name, settings, cfg, label, shared))
     return cells
+
+
+def sharing_predecessors(cells: list[Cell]) -> dict[str, str | None]:
+    """For each cell, the cell it waits for: cells that share episodes and stage the same base instances (same
+    episode settings, seed and number of instances) run one after another in the sweep's order, so a later one
+    takes the episodes an earlier one ran instead of running them beside it; all others run as soon as a CPU is
+    free."""
+    last: dict[str, str] = {}
+    before: dict[str, str | None] = {}
+    for cell in cells:
+        if cell.shared is None:
+            before[cell.name] = None
+            continue
+        encoded = config_json(cell.config)
+        key = json.dumps(
+            [{k: encoded.get(k) for k in EPISODE_SETTINGS}, encoded.get("seed"), encoded.get("n_instances")],
+            sort_keys=True,
+            default=str,
+        )
+        before[cell.name] = last.get(key)
+        last[key] = cell.name
+    return before

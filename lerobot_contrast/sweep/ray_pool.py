@@ -13,7 +13,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.sweep.cells import Cell
+from lerobot_contrast.sweep.cells import Cell, sharing_predecessors
 from lerobot_contrast.sweep.settings import RayArgs
 from lerobot_contrast.sweep.worker import CellOutcome, run_cell, wants_gpu
 
@@ -77,18 +77,22 @@ def run_cells(
     console: Console,
     gpus_per_cell: float = 1.0,
 ) -> list[CellOutcome]:
-    """Run every cell as a Ray task and return their outcomes in the cells' order, calling `report` as each ends."""
+    """Run every cell as a Ray task and return their outcomes in the cells' order, calling `report` as each ends.
+    A cell that would share episodes with an earlier one starts when that one ends (`sharing_predecessors`)."""
     task = ray.remote(run_cell)
-    refs = {
-        task.options(
+
+    def submit(cell: Cell) -> ray.ObjectRef:
+        return task.options(
             num_cpus=1,
             num_gpus=cell_gpus(cell, gpus_per_cell),
             max_retries=max_retries,
             name=f"cell {cell.name}",
             runtime_env={"env_vars": ONE_THREAD},
-        ).remote(cell.name, cell.config, cell.shared): cell
-        for cell in cells
-    }
+        ).remote(cell.name, cell.config, cell.shared)
+
+    predecessor = sharing_predecessors(list(cells))
+    followers = {predecessor[c.name]: c for c in cells if predecessor[c.name] is not None}
+    refs = {submit(cell): cell for cell in cells if predecessor[cell.name] is None}
     finished: dict[str, int] = {}  # complete cells count as their whole plan (a budget may stop one earlier)
     outcomes = {}
     with _progress(console) as progress:
@@ -103,6 +107,10 @@ def run_cells(
                 if outcome.status == "complete":
                     finished[outcome.name] = planned[outcome.name]
                 report(outcome)
+                if outcome.name in followers:  # whatever its outcome: the follower runs what is not shared
+                    follower = followers[outcome.name]
+                    refs[follower_ref := submit(follower)] = follower
+                    pending.append(follower_ref)
             progress.update(cell_bar, completed=len(outcomes))
             progress.update(trial_bar, completed=trials_recorded(cells, finished))
     return [outcomes[cell.name] for cell in cells]
