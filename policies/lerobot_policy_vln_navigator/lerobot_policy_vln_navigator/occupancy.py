@@ -3,11 +3,12 @@ the bumper), and a geodesic planner on it that turns a set of goal points into t
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 from scipy.ndimage import binary_dilation, distance_transform_edt, uniform_filter
-from scipy.sparse import coo_array
+from scipy.sparse import coo_array, csr_array
 from scipy.sparse.csgraph import dijkstra
 
 # Log-odds evidence: a ray's end is a hit, the cells it passed are free; clamped so a later view can overturn it.
@@ -114,18 +115,32 @@ def frontier_cells(grid: OccupancyMap, window: tuple[slice, slice]) -> np.ndarra
 
 def _geodesic(cost: np.ndarray, seeds: np.ndarray) -> np.ndarray:
     """8-connected shortest path cost from the seed cells, moving into a cell paying its cost per cell length."""
-    shape, n = cost.shape, cost.size
-    index = np.arange(n).reshape(shape)
-    sources, targets, weights = [], [], []
-    for dr, dc, length in MOVES:
-        src = index[max(0, -dr) : shape[0] - max(0, dr), max(0, -dc) : shape[1] - max(0, dc)]
-        dst = index[max(0, dr) : shape[0] + min(0, dr), max(0, dc) : shape[1] + min(0, dc)]
-        sources.append(src.ravel())
-        targets.append(dst.ravel())
-        weights.append(length * 0.5 * (cost.ravel()[src.ravel()] + cost.ravel()[dst.ravel()]))
-    graph = coo_array((np.concatenate(weights), (np.concatenate(sources), np.concatenate(targets))), shape=(n, n))
+    shape = cost.shape
     starts = np.flatnonzero(seeds)
     if starts.size == 0:
         return np.full(shape, np.inf)
+    edges, half_length, indices, indptr = _grid_graph(shape)
+    flat = cost.ravel()
+    weights = half_length.astype(flat.dtype) * (flat[edges[0]] + flat[edges[1]])
+    graph = csr_array((weights, indices, indptr), shape=(cost.size, cost.size))
     # Every move's cost is the same both ways, so one multi-source search from the seeds gives the cost-to-go.
-    return dijkstra(graph.tocsr(), directed=True, indices=starts, min_only=True).reshape(shape)
+    return dijkstra(graph, directed=True, indices=starts, min_only=True).reshape(shape)
+
+
+@functools.lru_cache(maxsize=64)
+def _grid_graph(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The 8-connected graph of a grid of `shape`, once per shape (the planner's windows take few): each edge's
+    source and target cell and half its length, in the order of its CSR layout, with that layout's column indices
+    and row pointers."""
+    index = np.arange(shape[0] * shape[1]).reshape(shape)
+    sources, targets, lengths = [], [], []
+    for dr, dc, length in MOVES:
+        src = index[max(0, -dr) : shape[0] - max(0, dr), max(0, -dc) : shape[1] - max(0, dc)].ravel()
+        sources.append(src)
+        targets.append(index[max(0, dr) : shape[0] + min(0, dr), max(0, dc) : shape[1] + min(0, dc)].ravel())
+        lengths.append(np.full(src.size, length * 0.5))
+    rows, cols = np.concatenate(sources), np.concatenate(targets)
+    # The layout scipy gives these edges, found by carrying each edge's number (exact in float64) through it.
+    layout = coo_array((np.arange(1, rows.size + 1, dtype=np.float64), (rows, cols)), shape=(index.size,) * 2).tocsr()
+    order = layout.data.astype(np.int64) - 1
+    return np.stack([rows[order], cols[order]]), np.concatenate(lengths)[order], layout.indices, layout.indptr
