@@ -18,6 +18,7 @@ import yaml
 from lerobot_contrast.build import TASK_ROBOTS, choose_robot, register_robots
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json
 from lerobot_contrast.flags import flag_names, flag_types
+from lerobot_contrast.policies import PRETRAINED_BUILD, policy_entry
 from lerobot_contrast.record.shared_episodes import EPISODE_SETTINGS, FOLDER
 
 FILE_KEYS = ("output_dir", "eval", "grid", "cells", "share_episodes")
@@ -180,6 +181,14 @@ def sweep_cells(path: Path, spec: dict[str, Any], output_dir: Path) -> list[Cell
     return cells
 
 
+def policy_shares_episodes(cfg: EvalConfig) -> bool:
+    """Whether the cell's policy makes episodes the instance decides: a learned one without action noise or language
+    blinding (scripted policies and noisy copies draw from each trial's own randomness, which differs between
+    cells). Its simulator must also restage its whole state for the cell to share (see the sweep worker)."""
+    learned = policy_entry(cfg.policy, cfg.task).build == PRETRAINED_BUILD
+    return learned and not cfg.policy.noise_std and not cfg.policy.language_blind
+
+
 def sharing_predecessors(cells: list[Cell]) -> dict[str, str | None]:
     """For each cell, the cell it waits for: cells that share episodes and stage the same base instances (same
     episode settings, seed and number of instances) run one after another in the sweep's order, so a later one
@@ -188,7 +197,7 @@ def sharing_predecessors(cells: list[Cell]) -> dict[str, str | None]:
     last: dict[str, str] = {}
     before: dict[str, str | None] = {}
     for cell in cells:
-        if cell.shared is None:
+        if cell.shared is None or not policy_shares_episodes(cell.config):
             before[cell.name] = None
             continue
         encoded = config_json(cell.config)

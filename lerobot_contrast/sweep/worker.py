@@ -23,6 +23,7 @@ from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.shared_episodes import SharedEpisodes, weights_digest
 from lerobot_contrast.record.sweep_dir import is_complete
+from lerobot_contrast.sweep.cells import policy_shares_episodes
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
@@ -121,9 +122,8 @@ def _shared(cfg: EvalConfig, robot: Robot, policy: Policy, folder: Path | None) 
     rebuilds its whole state, and a learned policy drawing nothing from the trial's randomness (no action noise,
     no language blinding). They are keyed by the weights too, so weights retrained at the same path share nothing
     with the old ones."""
-    learned = policy_entry(cfg.policy, cfg.task).build == PRETRAINED_BUILD
     whole = getattr(robot, "stages_whole_state", False)
-    if folder is None or not whole or not learned or cfg.policy.noise_std or cfg.policy.language_blind:
+    if folder is None or not whole or not policy_shares_episodes(cfg):
         return None
     return SharedEpisodes(folder, config_json(cfg) | {"weights": weights_digest(policy.policy)})
 
