@@ -9,8 +9,9 @@ Two designs, both run by the sweep engine (lerobot_contrast.sweep):
   Each axis pair is the all-four run kept to its originals and that pair's trials, every trial charged what staging
   it costs from the scene the previous kept trial left: the pairs are then the very perturbations the all-four set
   ran (their differences are not a fresh draw's noise), and the study runs 200 fewer episodes a seed.
-The scripted route follower runs both as a calibration row: it reads the goal from the instance, so ΔL and ΔLB
-cannot change what it does (and it runs without rendering the camera it does not read).
+The scripted route follower runs both as a calibration row: it reads the goal from the instance, so ΔL cannot change
+what it does and the other perturbations only give it a new route (it runs without rendering the camera it does not
+read).
 
 Usage: python scripts/reproduce_paper_vln.py [--output_dir outputs/paper_vln] [--seeds 0 1 2] [--n_instances 100]
        [--num_cpus N] [--paper_only] [--repeats 3] [--max_episode_steps N]
