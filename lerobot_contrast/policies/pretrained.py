@@ -14,12 +14,13 @@ from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import torch
 from lerobot.common.control_utils import predict_action
 from lerobot.configs import PreTrainedConfig
 from lerobot.configs.types import FeatureType
 from lerobot.policies import get_policy_class, make_policy_config, make_pre_post_processors
-from lerobot.policies.utils import make_robot_action, prepare_observation_for_inference
+from lerobot.policies.utils import make_robot_action
 from lerobot.utils.feature_utils import build_dataset_frame, dataset_to_policy_features, hw_to_dataset_features
 
 from lerobot_contrast.contrast.task import Task
@@ -243,15 +244,23 @@ class PretrainedPolicy:
     ) -> list[dict[str, float]]:
         """One control step of several episodes in one call of the policy's `lane_step`: frames are batched on the
         CPU and reach the policy's device in one transfer; `memories[i]` is episode i's own state."""
-        cpu = torch.device("cpu")
-        frames = [
-            prepare_observation_for_inference(build_dataset_frame(self.features, dict(obs), prefix="observation"), cpu)
-            for obs in observations
-        ]
-        tensors = [key for key, value in frames[0].items() if isinstance(value, torch.Tensor)]
-        batch: dict[str, Any] = {key: torch.cat([f[key] for f in frames]) for key in tensors}
+        frames = [build_dataset_frame(self.features, dict(obs), prefix="observation") for obs in observations]
+        batch: dict[str, Any] = {key: _stacked([frame[key] for frame in frames], key) for key in frames[0]}
         batch["task"], batch["robot_type"] = list(instructions), self.robot_type
         amp = self.device.type == "cuda" and self.use_amp
         with torch.inference_mode(), torch.autocast(device_type=self.device.type) if amp else nullcontext():
             actions = self.postprocessor(self.policy.lane_step(self.preprocessor(batch), memories))
         return [make_robot_action(row.unsqueeze(0), self.features) for row in actions]
+
+
+def _stacked(values: Sequence[Any], key: str) -> torch.Tensor:
+    """The rows of one observation key as a batch, as LeRobot's `prepare_observation_for_inference` gives each row
+    (images channels first, uint8 scaled to [0, 1] in float32), with the same values to the last bit: the pixels
+    are reordered while they are still bytes and converted in one pass, a quarter of the memory traffic."""
+    batch = torch.from_numpy(np.stack(values))
+    if "image" not in key:
+        return batch
+    batch = batch.permute(0, 3, 1, 2)
+    if batch.dtype != torch.uint8:
+        return batch.contiguous()
+    return batch.to(torch.float32, memory_format=torch.contiguous_format).div_(255)
