@@ -78,39 +78,50 @@ def run_cells(
     gpus_per_cell: float = 1.0,
 ) -> list[CellOutcome]:
     """Run every cell as a Ray task and return their outcomes in the cells' order, calling `report` as each ends.
-    A cell that would share episodes with an earlier one starts when that one ends (`sharing_predecessors`)."""
+    A cell that would share episodes with an earlier one (`sharing_predecessors`) waits for it to end, so it takes
+    that cell's episodes rather than running them beside it, unless a CPU would otherwise stand idle: then the
+    earliest waiting cell starts at once (sharing what it finds), and the sweep takes no longer than without
+    waiting."""
     task = ray.remote(run_cell)
+    cpus = max(1, int(ray.cluster_resources().get("CPU", 1)))
 
-    def submit(cell: Cell) -> ray.ObjectRef:
-        return task.options(
+    def submit(cell: Cell) -> None:
+        ref = task.options(
             num_cpus=1,
             num_gpus=cell_gpus(cell, gpus_per_cell),
             max_retries=max_retries,
             name=f"cell {cell.name}",
             runtime_env={"env_vars": ONE_THREAD},
         ).remote(cell.name, cell.config, cell.shared)
+        refs[ref] = cell
+        pending.append(ref)
 
     predecessor = sharing_predecessors(list(cells))
-    followers = {predecessor[c.name]: c for c in cells if predecessor[c.name] is not None}
-    refs = {submit(cell): cell for cell in cells if predecessor[cell.name] is None}
+    waiting = [cell for cell in cells if predecessor[cell.name] is not None]
+    refs: dict[ray.ObjectRef, Cell] = {}
+    pending: list[ray.ObjectRef] = []
+    for cell in cells:
+        if predecessor[cell.name] is None:
+            submit(cell)
     finished: dict[str, int] = {}  # complete cells count as their whole plan (a budget may stop one earlier)
     outcomes = {}
     with _progress(console) as progress:
         cell_bar = progress.add_task("cells", total=len(cells))
         trial_bar = progress.add_task("trials", total=sum(planned.values()))
-        pending = list(refs)
-        while pending:
-            ready, pending = ray.wait(pending, num_returns=len(pending), timeout=POLL_S)
+        while pending or waiting:
+            while waiting and len(pending) < cpus:  # an idle CPU: the earliest waiting cell need not wait
+                submit(waiting.pop(0))
+            ready, pending[:] = ray.wait(pending, num_returns=len(pending), timeout=POLL_S)
             for ref in ready:
                 outcome = _outcome(refs[ref], ref, max_retries)
                 outcomes[outcome.name] = outcome
                 if outcome.status == "complete":
                     finished[outcome.name] = planned[outcome.name]
                 report(outcome)
-                if outcome.name in followers:  # whatever its outcome: the follower runs what is not shared
-                    follower = followers[outcome.name]
-                    refs[follower_ref := submit(follower)] = follower
-                    pending.append(follower_ref)
+                # Whatever its outcome, the cell waiting for it starts: it runs what it does not find shared.
+                for follower in [c for c in waiting if predecessor[c.name] == outcome.name]:
+                    waiting.remove(follower)
+                    submit(follower)
             progress.update(cell_bar, completed=len(outcomes))
             progress.update(trial_bar, completed=trials_recorded(cells, finished))
     return [outcomes[cell.name] for cell in cells]
