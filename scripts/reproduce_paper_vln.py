@@ -104,7 +104,8 @@ def kept_to(run, axes: tuple[str, ...]):
         cost = record.cost if scene is None or record.instance is None else cost_model(scene, record.instance.scene)
         spent += cost
         kept.append(dataclasses.replace(record, cost=cost, cumulative_cost=spent))
-        scene = record.scene_after or scene
+        if record.scene_after is not None:
+            scene = record.scene_after
     return dataclasses.replace(run, results=frame(kept))
 
 
@@ -179,9 +180,10 @@ def error_table(dirs: dict, pairs: dict[str, tuple[str, str]]) -> list[str]:
     head = " | ".join(f"{f:.0%} of its cost" for f in ERROR_FRACTIONS)
     lines = [f"| design | {head} |", "|---|" + "---|" * len(ERROR_FRACTIONS)]
     for shown, (ref, name) in pairs.items():
+        standard, other = load(dirs, ref), load(dirs, name)  # read once a row: an axis pair re-reads the journals
         cells = []
         for fraction in ERROR_FRACTIONS:
-            err, n, _ = error_at_cost(load(dirs, ref), load(dirs, name), fraction)
+            err, n, _ = error_at_cost(standard, other, fraction)
             cells.append(f"{err:.3f} ({n:.0f} trials)")
         lines.append(f"| {shown} | {' | '.join(cells)} |")
     return lines
