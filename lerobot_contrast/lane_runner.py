@@ -171,7 +171,7 @@ class LaneRunner:
             if not self.waiting and not taken:
                 raise RuntimeError("lanes: a trial was asked for that no chain of the plan holds")
             return
-        if self.pool is None or len(active) < 2 * self.policy.min_rows:  # halves below it cost a whole call each
+        if self.pool is None or len(active) < 2:
             self._step(active)
             return
         first, second = active[: (len(active) + 1) // 2], active[(len(active) + 1) // 2 :]

@@ -63,7 +63,6 @@ class BatchedLanes:
         self.noise_std = policy.noise_std if isinstance(policy, NoisyPolicy) else 0.0
         inner = policy.policy if isinstance(policy, NoisyPolicy) else policy
         self.policies = [inner, *(inner.lane_twin() for _ in range(threads - 1))]  # one per answering thread
-        self.min_rows = getattr(inner, "min_lane_rows", 1)
         self.instructions = [""] * n
         self.memories: list[dict[str, Any]] = [{} for _ in range(n)]
         self.rngs = [np.random.default_rng(0) for _ in range(n)]

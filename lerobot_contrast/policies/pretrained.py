@@ -227,11 +227,6 @@ class PretrainedPolicy:
         )
         return make_robot_action(action, self.features)
 
-    @property
-    def min_lane_rows(self) -> int:
-        """Rows below which a `lane_step` call costs no less (it pads its batch up to them)."""
-        return getattr(self.policy, "lane_rows", (1,))[0]
-
     def lane_twin(self) -> PretrainedPolicy:
         """The same network behind processors of its own, to answer other lanes from another thread (a processor
         pipeline keeps the transition it is working on)."""

@@ -48,3 +48,23 @@ def test_shipped_policy_clears_its_success_floor():
     instances = LanguageTableTask().sample(30, np.random.default_rng(20261125))
     figures = closed_loop(Learner(WEIGHTS), Simulator(LanguageTableTask()), instances, max_steps=200)
     assert figures["success"] >= SUCCESS_FLOOR, figures
+
+
+def test_a_rows_action_does_not_depend_on_its_batch():
+    """Lanes give the journal of one lane: each episode's action is the same to the last bit alone or batched
+    with up to 11 others (two calls of the network past 8 rows)."""
+    torch.set_num_threads(1)
+    policy = TabletopPointerPolicy.from_pretrained(WEIGHTS).eval()
+    generator = torch.Generator().manual_seed(0)
+    images, states = torch.rand(12, 3, 180, 320, generator=generator), torch.rand(12, 4, generator=generator) * 0.4
+    tasks = [f"push the {c} star to the {p} of the board" for c in ("red", "blue", "green") for p in ("top", "left")]
+    tasks = (tasks * 2)[:12]
+
+    def step(rows: slice, memories: list[dict]) -> torch.Tensor:
+        batch = {"observation.images.top": images[rows], "observation.state": states[rows], "task": tasks[rows]}
+        return policy.lane_step(batch, memories)
+
+    alone = [step(slice(i, i + 1), [{}]) for i in range(12)]
+    for size in range(2, 13):
+        batched = step(slice(0, size), [{} for _ in range(size)])
+        assert torch.equal(batched, torch.cat(alone[:size])), f"a batch of {size} rounds its rows otherwise"

@@ -26,6 +26,7 @@ from lerobot_policy_tabletop_pointer.network import (
     ObjectHeatmaps,
     SteeringHead,
     apply_homography,
+    pad_rows,
     soft_argmax,
 )
 from lerobot_policy_tabletop_pointer.vocabulary import Tokenizer, build_vocabulary
@@ -45,15 +46,10 @@ def nearest_blocks(positions: Tensor, present: Tensor, source: Tensor, effector:
     return positions.gather(1, index.unsqueeze(-1).expand(-1, -1, 2))
 
 
-# The batch sizes `lane_step` runs its networks on: MKL multiplies fewer than 4 rows, and oneDNN convolves 16 or
-# more images, in another order of rounding (measured on AVX2), so a row's result would depend on its batch.
-LANE_ROWS = (4, 8)
-
-
-def _pad_rows(value: Tensor, rows: int) -> Tensor:
-    """`value` with its last row repeated up to `rows` rows."""
-    missing = rows - value.shape[0]
-    return value if missing <= 0 else torch.cat([value, value[-1:].expand(missing, *value.shape[1:])])
+# Batch sizes below which a row would round otherwise than in a larger batch (measured on AVX2): oneDNN convolves a
+# single image's dilated layers in another order, MKL multiplies fewer than 4 rows in another; and the most rows
+# `lane_step` runs at once, as oneDNN convolves 16 or more images in another order again.
+CONTEXT_ROWS, MATMUL_ROWS, LANE_CHUNK = 2, 4, 8
 
 
 class Pointed(NamedTuple):
@@ -71,7 +67,6 @@ def _privileged(batch: dict[str, Any], name: str) -> Tensor:
 class TabletopPointerPolicy(PreTrainedPolicy):
     config_class = TabletopPointerConfig
     name = "tabletop_pointer"
-    lane_rows = LANE_ROWS  # fewer rows cost as much as LANE_ROWS[0]: callers may group lanes by it
 
     def __init__(self, config: TabletopPointerConfig, dataset_meta: Any = None, **kwargs: Any) -> None:
         super().__init__(config)
@@ -150,37 +145,37 @@ class TabletopPointerPolicy(PreTrainedPolicy):
     def lane_step(self, batch: dict[str, Any], memories: list[dict[str, Tensor]]) -> Tensor:
         """One control step of independent episodes (evaluation lanes): row i's episode memory is `memories[i]`,
         empty at its episode's start and filled here. A row's action is the same to the last bit in any batch: each
-        instruction is encoded on its own, and the networks run on LANE_ROWS[0] to LANE_ROWS[1] rows at a time
-        (repeating the last row), the batch sizes for which MKL and oneDNN round every row alike."""
+        instruction is encoded on its own, the networks run on at most LANE_CHUNK rows at a time, and the layers that
+        round a small batch otherwise run on CONTEXT_ROWS or MATMUL_ROWS rows (the last row repeated), which costs
+        one lane little: the convolutions that dominate run on its one image."""
         for memory, task in zip(memories, batch["task"], strict=True):
             if "text" not in memory:
                 memory["text"] = self.instruction(self.tokenizer([task], batch[STATE_KEY].device))
         tensors = {key: value for key, value in batch.items() if isinstance(value, Tensor)}
-        # Resized before the rows are padded (each row is resized on its own), so padding costs no resizing.
         tensors[IMAGE_KEY] = resize_image(tensors[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
         # On a GPU the kernels are chosen by batch size, so every call runs on the same number of rows there.
-        low, high = LANE_ROWS if batch[STATE_KEY].device.type == "cpu" else (LANE_ROWS[1], LANE_ROWS[1])
+        rows = LANE_CHUNK if batch[STATE_KEY].device.type != "cpu" else 1
         actions = []
-        for start in range(0, len(memories), high):
-            chunk = {key: _pad_rows(value[start : start + high], low) for key, value in tensors.items()}
-            actions.append(self._lane_chunk(chunk, memories[start : start + high], low))
+        for start in range(0, len(memories), LANE_CHUNK):
+            chunk = {key: pad_rows(value[start : start + LANE_CHUNK], rows) for key, value in tensors.items()}
+            actions.append(self._lane_chunk(chunk, memories[start : start + LANE_CHUNK], rows))
         return torch.cat(actions)
 
-    def _lane_chunk(self, batch: dict[str, Tensor], memories: list[dict[str, Tensor]], low: int) -> Tensor:
-        rows = len(memories)
-        logits, presence = self.heatmaps(batch[IMAGE_KEY])
-        text = {key: _pad_rows(torch.cat([m["text"][key] for m in memories]), low) for key in memories[0]["text"]}
+    def _lane_chunk(self, batch: dict[str, Tensor], memories: list[dict[str, Tensor]], rows: int) -> Tensor:
+        logits, presence = self.heatmaps(batch[IMAGE_KEY], context_rows=CONTEXT_ROWS)
+        text = {key: pad_rows(torch.cat([m["text"][key] for m in memories]), rows) for key in memories[0]["text"]}
         positions = apply_homography(self.image_to_board, soft_argmax(logits))
         seen = {"logits": logits, "presence": presence, "positions": positions, **text}
         pointed = self.compose(seen)
         for i, memory in enumerate(memories):
             memory.setdefault("goal", pointed.goal[i : i + 1])
-        goal = _pad_rows(torch.cat([m["goal"] for m in memories]), low)
+        goal = pad_rows(torch.cat([m["goal"] for m in memories]), rows)
         effector = batch[STATE_KEY][:, 2:4].float()
         present = (presence > 0).float()
         obstacles = nearest_blocks(positions, present, pointed.weights, effector, self.config.obstacles)
-        action = self.steering.action(*self.steering(effector, pointed.source, goal, obstacles))
-        return (action[:rows] * self.config.max_action).clamp(-self.config.max_action, self.config.max_action)
+        steer = [pad_rows(value, MATMUL_ROWS) for value in (effector, pointed.source, goal, obstacles)]
+        action = self.steering.action(*self.steering(*steer))[: len(memories)]
+        return (action * self.config.max_action).clamp(-self.config.max_action, self.config.max_action)
 
     def predict_action_chunk(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
         return self.select_action(batch).unsqueeze(1)

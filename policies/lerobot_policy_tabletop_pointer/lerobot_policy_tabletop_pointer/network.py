@@ -32,16 +32,25 @@ class ObjectHeatmaps(nn.Module):
         self.head = nn.Sequential(nn.Conv2d(2 * c, c, 1), nn.ReLU(inplace=True), nn.Conv2d(c, n_objects, 1))
         self.presence = nn.Linear(2, 1)
 
-    def forward(self, image: Tensor) -> tuple[Tensor, Tensor]:
+    def forward(self, image: Tensor, context_rows: int = 1) -> tuple[Tensor, Tensor]:
+        """`context_rows`: the dilated layers run on at least this many images (the last one repeated), for a
+        batch whose rows must round as in any larger batch: oneDNN convolves a single image's dilated layers in
+        another order."""
         b, _, h, w = image.shape
         v = torch.linspace(-1, 1, h, device=image.device).view(1, 1, h, 1).expand(b, 1, h, w)
         u = torch.linspace(-1, 1, w, device=image.device).view(1, 1, 1, w).expand(b, 1, h, w)
         fine = self.stem(torch.cat([image * 2 - 1, u, v], dim=1))
-        coarse = F.interpolate(self.context(fine), size=fine.shape[-2:], mode="nearest")
+        coarse = F.interpolate(self.context(pad_rows(fine, context_rows))[:b], size=fine.shape[-2:], mode="nearest")
         logits = self.head(torch.cat([fine, coarse], dim=1))
         flat = logits.flatten(2)
         pooled = torch.stack([flat.amax(-1), flat.logsumexp(-1) - flat.mean(-1)], dim=-1)
         return logits, self.presence(pooled).squeeze(-1)
+
+
+def pad_rows(value: Tensor, rows: int) -> Tensor:
+    """`value` with its last row repeated up to `rows` rows."""
+    missing = rows - value.shape[0]
+    return value if missing <= 0 else torch.cat([value, value[-1:].expand(missing, *value.shape[1:])])
 
 
 def soft_argmax(logits: Tensor) -> Tensor:
