@@ -26,8 +26,10 @@ from lerobot_contrast.runner import RobotRunner
 
 # Trials whose staging was paid for: the scene they left behind is where the next one starts.
 STAGED = ("done", "aborted")
-# Episodes waiting for their turn to be recorded may hold this many bytes of observations before idle lanes wait.
-HELD_BYTES = 512 << 20
+# Bytes of observations the lanes' episodes may hold for their turn to be recorded (those waiting and those running);
+# past it only the trial earliest in plan order steps, so memory stays bounded whatever a step's observation weighs
+# (a 200-step episode of the apartment's camera and depth images holds 420 MB).
+HELD_BYTES = 1 << 30
 
 # (trial, staged, scene the lane left) -> the trial's context as the lane runs it.
 ContextFor = Callable[[PlannedTrial, Staged, Scene], TrialContext]
@@ -160,13 +162,16 @@ class LaneRunner:
         self.copies = []
 
     def _advance(self) -> None:
-        """Give idle lanes the next chains, then take one control step on every lane mid-episode."""
+        """Give idle lanes the next chains, then take one control step on every lane mid-episode (on the one whose
+        trial comes first in plan order, which the run needs soonest, while the episodes held reach HELD_BYTES)."""
         taken = False
         for lane in self.lanes:
             if lane.observation is None and self.waiting and self._may_run_ahead():
                 self._take_chain(lane, self.waiting.popleft())
                 taken = True
         active = [lane for lane in self.lanes if lane.observation is not None]
+        if active and self._held() >= HELD_BYTES:
+            active = [min(active, key=lambda lane: lane.trial.index)]
         if not active:  # the chains taken may have ended without a step (episodes shared by a sweep's cells)
             if not self.waiting and not taken:
                 raise RuntimeError("lanes: a trial was asked for that no chain of the plan holds")
@@ -190,10 +195,14 @@ class LaneRunner:
     def lanes_busy(self) -> bool:
         return any(lane.observation is not None for lane in self.lanes)
 
+    def _held(self) -> int:
+        """Bytes of observations the tapes hold: the episodes waiting for their turn and those running."""
+        tapes = [result.tape for result in self.results.values()] + [lane.tape for lane in self.lanes]
+        return sum(tape.nbytes for tape in tapes if tape is not None)
+
     def _may_run_ahead(self) -> bool:
-        """Whether the episodes held for their turn leave room for another chain (one always runs)."""
-        held = sum(r.tape.nbytes for r in self.results.values() if r.tape is not None)
-        return held < HELD_BYTES or not self.lanes_busy()
+        """Whether the episodes held leave room for another chain (one always runs)."""
+        return self._held() < HELD_BYTES or not self.lanes_busy()
 
     def _take_chain(self, lane: Lane, chain: list[PlannedTrial]) -> None:
         """The first chain goes on from where the run stands (a resumed run may stop mid-chain); others start anew."""

@@ -9,13 +9,14 @@ from pathlib import Path
 
 import pytest
 
+from lerobot_contrast import lane_runner
 from lerobot_contrast.build import make_robot, register_robots
 from lerobot_contrast.config import EvalConfig, StopArgs
 from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
 from lerobot_contrast.eval import planned_evaluation
 from lerobot_contrast.evaluation import run
 from lerobot_contrast.lane_choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
-from lerobot_contrast.lane_runner import chains
+from lerobot_contrast.lane_runner import LaneRunner, chains
 from lerobot_contrast.lane_seats import batches_lanes
 from lerobot_contrast.policies import PolicyArgs, make_policy
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
@@ -43,6 +44,16 @@ class Watch(QuietObserver):
         if self.stop_after is not None and len(self.episodes) > self.stop_after:
             raise KeyboardInterrupt  # as a kill between an episode and its journal line
         return EpisodeFiles()
+
+
+class Sizes(QuietObserver):
+    """The bytes of each step's observation, as a lane holds it."""
+
+    def __init__(self) -> None:
+        self.bytes: list[int] = []
+
+    def step(self, timestamp_s, observation, action):
+        self.bytes.append(sum(getattr(v, "nbytes", 8) for v in observation.values()))
 
 
 class LostTabletop(LanguageTableSim):
@@ -108,6 +119,39 @@ def test_the_apartment_gives_the_same_journal_with_three_lanes(tmp_path):
     for lanes in (1, 3):
         evaluate(tmp_path / f"l{lanes}", lanes, task="vln", policy="route_follower", n=3, steps=60)
     assert journal(tmp_path / "l1") == journal(tmp_path / "l3")
+
+
+@pytest.mark.slow
+def test_the_learned_navigator_gives_one_lanes_journal_and_episodes_with_three_answered_by_two_threads(tmp_path):
+    watched = {}
+    for lanes in (1, 3):
+        watched[lanes] = Watch()
+        evaluate(
+            tmp_path / f"l{lanes}", lanes, task="vln", policy="vln_navigator", n=3, steps=40,
+            observers=[watched[lanes]], lane_threads=2,
+        )  # fmt: skip
+    assert journal(tmp_path / "l1") == journal(tmp_path / "l3")
+    assert watched[1].episodes == watched[3].episodes
+    assert sum(len(e[3]) for e in watched[1].episodes) > 100  # the policy really drove the robot
+
+
+def test_lanes_hold_at_most_their_memory_bound_and_one_episode_and_give_one_lanes_journal(tmp_path, monkeypatch):
+    """Episodes waiting for their turn to be recorded are held in memory: past the bound only the trial earliest in
+    plan order steps, so a heavy observation (the apartment's images) cannot fill the machine."""
+    steps, held, sizes = 30, [], Sizes()
+    evaluate(tmp_path / "one", 1, n=4, steps=steps, observers=[sizes])
+    step_bytes = max(sizes.bytes)
+    monkeypatch.setattr(lane_runner, "HELD_BYTES", 4 * steps * step_bytes)
+    advance = LaneRunner._advance
+
+    def watched(runner):
+        held.append(runner._held())
+        advance(runner)
+
+    monkeypatch.setattr(LaneRunner, "_advance", watched)
+    evaluate(tmp_path / "lanes", 4, n=4, steps=steps, observers=[Watch()])
+    assert journal(tmp_path / "lanes") == journal(tmp_path / "one")
+    assert lane_runner.HELD_BYTES <= max(held) <= lane_runner.HELD_BYTES + 2 * steps * step_bytes
 
 
 def test_a_run_killed_with_lanes_resumes_to_the_journal_of_one_lane(tmp_path):

@@ -110,3 +110,17 @@ def test_obstacle_ranges_from_depth_agree_with_the_simulators_ray_hits():
         errors.append(np.abs(ranges - truth) / truth)
     # Per column the depth range is the nearest over the column's strip, the truth the ray through its centre.
     assert np.median(np.concatenate(errors)) < 0.05 and np.mean(np.concatenate(errors) < 0.2) > 0.85
+
+
+def test_a_rows_scan_does_not_depend_on_its_batch():
+    """Lanes give the journal of one lane: each lane's scanner logits are the same to the last bit alone or batched
+    with up to 17 others (a call of the scanner per 8 rows: 16 or more round otherwise again)."""
+    torch.set_num_threads(1)
+    policy = VLNNavigatorPolicy.from_pretrained(WEIGHTS).eval()
+    c = policy.config
+    images = torch.rand(18, 3, c.image_height, c.image_width, generator=torch.Generator().manual_seed(0))
+    with torch.no_grad():
+        alone = [policy.lane_logits(images[i : i + 1]) for i in range(18)]
+        for size in range(2, 19):
+            batched = policy.lane_logits(images[:size])
+            assert torch.equal(batched, torch.cat(alone[:size])), f"a batch of {size} rounds its rows otherwise"

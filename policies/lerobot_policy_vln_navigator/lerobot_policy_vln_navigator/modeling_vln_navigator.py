@@ -32,6 +32,9 @@ from lerobot_policy_vln_navigator.network import ColumnScanner, InstructionReade
 from lerobot_policy_vln_navigator.occupancy import OccupancyMap, Planner, frontier_cells, goal_cells
 from lerobot_policy_vln_navigator.vocabulary import Tokenizer, build_vocabulary
 
+# Batch sizes within which the scanner rounds a row as in any other (measured on AVX2): oneDNN convolves a single
+# image in another order, and 16 or more in another again.
+SCAN_ROWS, LANE_CHUNK = 2, 8
 FORWARD, TURN_LEFT, TURN_RIGHT, STOP = (COMMANDS.index(c) for c in ("forward", "turn_left", "turn_right", "stop"))
 
 
@@ -42,6 +45,12 @@ def resize_image(image: Tensor, height: int, width: int) -> Tensor:
     if image.shape[-2] % height == 0 and image.shape[-1] % width == 0:  # the same means, twice as fast
         return F.avg_pool2d(image, (image.shape[-2] // height, image.shape[-1] // width))
     return F.interpolate(image, size=(height, width), mode="area")
+
+
+def _pad_rows(value: Tensor, rows: int) -> Tensor:
+    """`value` with its last row repeated up to `rows` rows."""
+    missing = rows - value.shape[0]
+    return value if missing <= 0 else torch.cat([value, value[-1:].expand(missing, *value.shape[1:])])
 
 
 class MissingDepthError(ValueError):
@@ -94,8 +103,8 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
     def read(self, tasks: list[str], device: torch.device) -> tuple[Tensor, Tensor]:
         return self.reader(self.tokenizer(list(tasks), device))
 
-    def _start_episode(self, batch: dict[str, Any], state: np.ndarray, device: torch.device) -> list[dict[str, Any]]:
-        first, final = self.read(batch["task"], device)
+    def _start_episode(self, tasks: list[str], state: np.ndarray, device: torch.device) -> list[dict[str, Any]]:
+        first, final = self.read(tasks, device)
         return [
             {
                 "memory": SightMemory(len(self.config.categories), self.config.memory_points),
@@ -110,11 +119,35 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
     @torch.no_grad()
     def select_action(self, batch: dict[str, Any], **kwargs: Any) -> Tensor:
         state = batch[STATE_KEY].float().cpu().numpy().astype(np.float64)
-        ranges = self.obstacle_ranges(batch)
         image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
         logits = self.scanner.classify(image)
         if self._episode is None or len(self._episode) != state.shape[0]:
-            self._episode = self._start_episode(batch, state, logits.device)
+            self._episode = self._start_episode(batch["task"], state, logits.device)
+        return self._commands(self._episode, state, self.obstacle_ranges(batch), logits)
+
+    @torch.no_grad()
+    def lane_step(self, batch: dict[str, Any], memories: list[dict[str, Any]]) -> Tensor:
+        """One control step of independent episodes (evaluation lanes): row i's episode is `memories[i]`, empty at
+        its start and filled here. A row's command is the same in any batch: each instruction is read on its own and
+        the scanner sees each image as in any batch (`lane_logits`)."""
+        state = batch[STATE_KEY].float().cpu().numpy().astype(np.float64)
+        image = resize_image(batch[IMAGE_KEY].float(), self.config.image_height, self.config.image_width)
+        logits = self.lane_logits(image)
+        for i, memory in enumerate(memories):
+            if not memory:
+                memory.update(self._start_episode(batch["task"][i : i + 1], state[i : i + 1], image.device)[0])
+        return self._commands(memories, state, self.obstacle_ranges(batch), logits)
+
+    def lane_logits(self, image: Tensor) -> Tensor:
+        """The scanner's class logits for lanes' resized images, each row the same to the last bit in any batch: the
+        scanner runs on SCAN_ROWS to LANE_CHUNK rows at a time, the last row repeated (on a GPU, whose kernels are
+        chosen by batch size, always on LANE_CHUNK)."""
+        rows = LANE_CHUNK if image.device.type != "cpu" else SCAN_ROWS
+        chunks = [image[start : start + LANE_CHUNK] for start in range(0, image.shape[0], LANE_CHUNK)]
+        return torch.cat([self.scanner.classify(_pad_rows(chunk, rows))[: len(chunk)] for chunk in chunks])
+
+    def _commands(self, episodes: list[dict[str, Any]], state: np.ndarray, ranges: Tensor, logits: Tensor) -> Tensor:
+        """(B, commands) one-hot next commands, each episode's map and memory updated with its row's scan."""
         confidence, classes = (t.numpy() for t in logits.softmax(-1).cpu().max(-1))
         bearings, scans = self.bearings.cpu().numpy().astype(np.float64), ranges.cpu().numpy().astype(np.float64)
         # Up close an object fills the view and the scanner's class is least sure: where a subgoal is comes from
@@ -122,7 +155,7 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
         keep = (classes < len(self.config.categories)) & (confidence >= self.config.seen_confidence)
         keep &= scans >= self.config.near_m
         actions = torch.zeros(state.shape[0], len(COMMANDS))
-        for i, episode in enumerate(self._episode):
+        for i, episode in enumerate(episodes):
             pose = state[i, :3]
             episode["memory"].add(pose, bearings, scans[i], classes[i], keep[i])
             episode["map"].add_scan(pose, bearings, scans[i], self.config.max_range_m)
