@@ -28,7 +28,7 @@ from lerobot_contrast.runner import RobotRunner
 STAGED = ("done", "aborted")
 # Bytes of observations the lanes' episodes may hold for their turn to be recorded (those waiting and those running);
 # past it only the trial earliest in plan order steps, so memory stays bounded whatever a step's observation weighs
-# (a 200-step episode of the apartment's camera and depth images holds 420 MB).
+# (a 200-step episode of the apartment's camera and depth images holds 430 MB).
 HELD_BYTES = 1 << 30
 
 # (trial, staged, scene the lane left) -> the trial's context as the lane runs it.
