@@ -102,37 +102,29 @@ def journal(run_dir: Path) -> list[dict]:
 
 
 @pytest.mark.slow
-def test_the_learned_default_gives_one_lanes_journal_and_episodes_with_four_answered_by_two_threads(tmp_path):
+@pytest.mark.parametrize(
+    ("task", "policy", "lanes", "steps", "driven"),
+    [("language_table", "tabletop_pointer", 4, 25, 50), ("vln", "vln_navigator", 3, 40, 100)],
+)
+def test_each_learned_default_gives_one_lanes_journal_and_episodes_with_lanes_answered_by_two_threads(
+    tmp_path, task, policy, lanes, steps, driven
+):
     watched = {}
-    for lanes in (1, 4):
-        watched[lanes] = Watch()
+    for n in (1, lanes):
+        watched[n] = Watch()
         evaluate(
-            tmp_path / f"l{lanes}", lanes, policy="tabletop_pointer", n=4, steps=25, observers=[watched[lanes]],
+            tmp_path / f"l{n}", n, task=task, policy=policy, n=lanes, steps=steps, observers=[watched[n]],
             lane_threads=2,
         )  # fmt: skip
-    assert journal(tmp_path / "l1") == journal(tmp_path / "l4")
-    assert watched[1].episodes == watched[4].episodes
-    assert sum(len(e[3]) for e in watched[1].episodes) > 50  # the policy really drove the robot
+    assert journal(tmp_path / "l1") == journal(tmp_path / f"l{lanes}")
+    assert watched[1].episodes == watched[lanes].episodes
+    assert sum(len(e[3]) for e in watched[1].episodes) > driven  # the policy really drove the robot
 
 
 def test_the_apartment_gives_the_same_journal_with_three_lanes(tmp_path):
     for lanes in (1, 3):
         evaluate(tmp_path / f"l{lanes}", lanes, task="vln", policy="route_follower", n=3, steps=60)
     assert journal(tmp_path / "l1") == journal(tmp_path / "l3")
-
-
-@pytest.mark.slow
-def test_the_learned_navigator_gives_one_lanes_journal_and_episodes_with_three_answered_by_two_threads(tmp_path):
-    watched = {}
-    for lanes in (1, 3):
-        watched[lanes] = Watch()
-        evaluate(
-            tmp_path / f"l{lanes}", lanes, task="vln", policy="vln_navigator", n=3, steps=40,
-            observers=[watched[lanes]], lane_threads=2,
-        )  # fmt: skip
-    assert journal(tmp_path / "l1") == journal(tmp_path / "l3")
-    assert watched[1].episodes == watched[3].episodes
-    assert sum(len(e[3]) for e in watched[1].episodes) > 100  # the policy really drove the robot
 
 
 def test_lanes_hold_at_most_their_memory_bound_and_one_episode_and_give_one_lanes_journal(tmp_path, monkeypatch):
