@@ -1,6 +1,6 @@
 """`python -m lerobot_contrast.calibrate`: find the printed ArUco board lying on the table in each camera's view and
-store the table-to-pixel homography (<task>.calibration.json: beside your task file, or for a shipped example in
-LeRobot's calibration folder under tables/), where eval's staging finds it, for staging overlays and checks.
+store the lens and the table-to-pixel homography (<task>.calibration.json: beside your task file, or for a shipped
+example in LeRobot's calibration folder under tables/), where eval's staging finds it, for staging overlays and checks.
 
 `--write_board=board.pdf` writes the board to print (its printed size is stated on it and here).
 """
@@ -49,7 +49,7 @@ class CalibrateConfig:
     # The calibration file to write (default: <task>.calibration.json beside your task file; for a shipped example,
     # tables/<task>.calibration.json in LeRobot's calibration folder, $HF_LEROBOT_CALIBRATION). eval finds either.
     output: Path | None = None
-    # Refuse a fit whose RMS reprojection error is above this many pixels.
+    # Refuse a fit whose RMS reprojection error is above this many pixels (a positive number).
     max_error_px: float = 2.0
     # Write the printable board to this .pdf or .png and exit.
     write_board: Path | None = None
@@ -92,17 +92,19 @@ def camera_frames(robot: Any) -> dict[str, np.ndarray]:
 
 
 def calibrate(cfg: CalibrateConfig, images: dict[str, np.ndarray]) -> Path:
-    """Fit each camera's homography, write the calibration file, and say how well each fits."""
+    """Fit each camera's lens and homography, write the calibration file, and say how well each fits."""
+    from lerobot_contrast.domains import load_task
     from lerobot_contrast.staging.homography import CalibrationError, fit, save
-    from lerobot_contrast.staging.setup import default_calibration
+    from lerobot_contrast.staging.setup import default_calibration, geometry
 
     output = cfg.output or default_calibration(cfg.task)
     if output is None:
         raise ConfigError(f"--task={cfg.task} is not a task file; name the calibration file with --output=PATH")
+    workspace = geometry(load_task(cfg.task), 0.0).bounds  # where the lens must be known well enough
     fitted, failed = [], []
     for camera, image in images.items():
         try:
-            fitted.append(fit(camera, image, cfg.board, cfg.max_error_px))
+            fitted.append(fit(camera, image, cfg.board, cfg.max_error_px, workspace))
         except CalibrationError as error:
             failed.append(str(error))
     if not fitted:
@@ -112,8 +114,10 @@ def calibrate(cfg: CalibrateConfig, images: dict[str, np.ndarray]) -> Path:
     except OSError as error:
         raise UserError(f"cannot write {output} ({error.strerror}); name another file with --output=PATH") from None
     for calibration in fitted:
+        lens = calibration.lens
         print(
-            f"camera {calibration.camera}: {calibration.markers} markers, reprojection error {calibration.error_px:.2f} px"
+            f"camera {calibration.camera}: {calibration.markers} markers, reprojection error {calibration.error_px:.2f} "
+            f"px, lens k1 {lens.k1:+.3f} (+-{lens.k1_sigma:.3f}), focal length {lens.focal:.0f} px"
         )
     for line in failed:
         print(f"skipped: {line}")
@@ -136,6 +140,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"\nThe board: {printed_size_text()}.")
             return 0
         cfg = parse_config(CalibrateConfig, argv)
+        if not cfg.max_error_px > 0:  # NaN too
+            raise ConfigError(f"--max_error_px={cfg.max_error_px:g}: give a positive number of pixels (default 2)")
         if cfg.write_board is not None:
             print(write_page(cfg.write_board))
             return 0

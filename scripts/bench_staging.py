@@ -56,12 +56,12 @@ def main() -> int:
     figures = {}
     for height, width in ((180, 320), (360, 640)):
         renderer = TabletopRenderer(height, width)
-        calibration = homography.fit("top", board_frame(renderer), WHERE, max_error_px=2.0)
+        calibration = homography.fit("top", board_frame(renderer), WHERE, 2.0, WORKSPACE)
         error = np.abs(calibration.to_pixels(GRID) - sim_pixels(renderer, GRID)).max()
         figures[f"homography_max_px_{width}"] = round(float(error), 3)
         figures[f"board_rms_px_{width}"] = round(calibration.error_px, 3)
     renderer = TabletopRenderer()
-    calibration = homography.fit("top", board_frame(renderer), WHERE, max_error_px=2.0)
+    calibration = homography.fit("top", board_frame(renderer), WHERE, 2.0, WORKSPACE)
     misses, errors = 0, []
     colours = {name: name.split("_")[0] for name in CUBES}
     for blocks in layouts(n, np.random.default_rng(0)):

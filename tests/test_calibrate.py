@@ -19,6 +19,7 @@ from lerobot_contrast.staging.setup import default_calibration, make_bench
 from tests.staging.sim_camera import WHERE, board_frame, sim_pixels
 
 # The so101_blocks workspace (metres), where staging needs the homography to hold.
+SO101_WORKSPACE = ((0.15, -0.25), (0.45, 0.25))
 WORKSPACE = np.array([[x, y] for x in np.linspace(0.15, 0.45, 7) for y in np.linspace(-0.25, 0.25, 7)])
 BOARD_FLAGS = [f"--board.x={WHERE.x}", f"--board.y={WHERE.y}", f"--board.yaw_deg={WHERE.yaw_deg}"]
 
@@ -29,7 +30,7 @@ def renderer():
 
 
 def test_the_board_rendered_on_the_table_gives_the_simulators_homography_within_a_pixel(renderer):
-    calibration = homography.fit("top", board_frame(renderer), WHERE, max_error_px=1.0)
+    calibration = homography.fit("top", board_frame(renderer), WHERE, 1.0, SO101_WORKSPACE)
     assert calibration.markers >= homography.MIN_MARKERS
     assert np.abs(calibration.to_pixels(WORKSPACE) - sim_pixels(renderer, WORKSPACE)).max() < 1.0
     # Back from pixels to the table, and lifted off it through the camera pose the homography implies.

@@ -7,11 +7,14 @@ Placed on the table with the page's top edge away from the robot, its right edge
 from __future__ import annotations
 
 import math
+from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from lerobot_contrast.contrast.errors import UserError
 
 DICTIONARY = cv2.aruco.DICT_4X4_50
 COLUMNS, ROWS = 4, 3
@@ -76,12 +79,25 @@ def page_image(dpi: int = DPI) -> tuple[np.ndarray, float]:
 
 
 def write_page(path: Path, dpi: int = DPI) -> str:
-    """Write the printable board (PNG or PDF, by suffix) at `dpi`; returns what to print it as."""
+    """Write the printable board (PNG or PDF, by suffix) at `dpi`; returns what to print it as. A suffix other than
+    .pdf or .png, or a folder that cannot be written, is one line and writes nothing."""
     from PIL import Image
 
+    kind = path.suffix.lower().lstrip(".")
+    if kind not in ("pdf", "png"):
+        raise UserError(f"--write_board={path}: writes a .pdf or a .png, not {path.suffix or 'a file without one'}")
     image, _ = page_image(dpi)
-    path.parent.mkdir(parents=True, exist_ok=True)
     # A PDF carries its print size in its resolution, a PNG in its dpi field: either prints at 100% as stated.
-    options = {"resolution": dpi} if path.suffix.lower() == ".pdf" else {"dpi": (dpi, dpi)}
-    Image.fromarray(image).save(path, **options)
+    options = {"resolution": dpi} if kind == "pdf" else {"dpi": (dpi, dpi)}
+    temporary = path.with_name(f".{path.name}.tmp")  # a page cut short is never left under the name asked for
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(image).save(temporary, format=kind.upper(), **options)
+        temporary.replace(path)
+    except OSError as error:
+        with suppress(OSError):  # where the folder is not one, there is nothing to remove
+            temporary.unlink(missing_ok=True)
+        raise UserError(
+            f"--write_board={path}: cannot write it ({error.strerror or error}); name a file in a folder you can write"
+        ) from None
     return f"{path}: {printed_size_text()}"

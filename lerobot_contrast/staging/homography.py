@@ -1,14 +1,13 @@
-"""The table-to-camera homography: fitting it to the board's markers, its JSON file, and mapping between table
-metres and pixels, including points above the table (an object's centre) through the camera pose it implies.
-
-Pixels follow OpenCV: (col, row) with pixel centres at integers.
+"""The table-to-camera calibration: the lens and the homography fitted to the board's markers, its JSON file, and
+mapping between table metres and pixels, including points above the table (an object's centre) through the camera
+pose it implies. Pixels follow OpenCV: (col, row) with pixel centres at integers.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -17,11 +16,16 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.staging import board
+from lerobot_contrast.staging.lens import Lens, fit_lens, spread_m
 
-CALIBRATION_VERSION = 1
+CALIBRATION_VERSION = 2  # 2: the lens; files of version 1 (a homography alone) still load, as a lens-free camera
+READABLE_VERSIONS = (1, 2)
 MIN_MARKERS = 4  # fewer leaves the fit unchecked (one marker's four corners fit any homography exactly)
 # Used where the homography cannot tell the focal length (a camera looking straight down): a typical webcam's.
 FALLBACK_FOCAL_FRACTION = 0.8
+# The most the lens's uncertainty (k1 +- 3 standard deviations) may move a point of the workspace: half the 2 cm
+# staging tolerance would leave too little for the rest, a quarter of it does not.
+MAX_SPREAD_M = 0.01
 
 
 class CalibrationError(UserError):
@@ -37,14 +41,18 @@ class CameraCalibration:
     homography: np.ndarray  # (3, 3): table (x, y, 1) in metres -> pixel (col, row, 1)
     error_px: float  # RMS reprojection error of the marker corners
     markers: int
+    lens: Lens | None = None  # None: a lens-free (pinhole) camera; the homography maps to undistorted pixels
 
     def to_pixels(self, xy: np.ndarray) -> np.ndarray:
-        """Table points (N, 2) on the table's surface -> pixels (N, 2)."""
-        return cv2.perspectiveTransform(np.asarray(xy, np.float64).reshape(-1, 1, 2), self.homography).reshape(-1, 2)
+        """Table points (N, 2) on the table's surface -> pixels (N, 2), as the camera sees them (through its lens)."""
+        ideal = cv2.perspectiveTransform(np.asarray(xy, np.float64).reshape(-1, 1, 2), self.homography).reshape(-1, 2)
+        return ideal if self.lens is None else self.lens.distort(ideal)
 
     def to_table(self, pixels: np.ndarray, height: float = 0.0) -> np.ndarray:
         """Pixels (N, 2) -> table points (N, 2) where their rays cross the plane `height` metres above the table."""
         pixels = np.asarray(pixels, np.float64).reshape(-1, 2)
+        if self.lens is not None:
+            pixels = self.lens.undistort(pixels)
         if height == 0.0:
             inverse = np.linalg.inv(self.homography)
             return cv2.perspectiveTransform(pixels.reshape(-1, 1, 2), inverse).reshape(-1, 2)
@@ -58,13 +66,15 @@ class CameraCalibration:
         points = np.column_stack([np.asarray(xy, np.float64).reshape(-1, 2), np.full(len(xy), height)])
         camera = points @ rotation.T + translation
         projected = camera @ intrinsics.T
-        return projected[:, :2] / projected[:, 2:]
+        ideal = projected[:, :2] / projected[:, 2:]
+        return ideal if self.lens is None else self.lens.distort(ideal)
 
     def pose(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Intrinsics, rotation and translation (table -> camera) implied by the homography, for square pixels
-        centred on the image."""
+        centred on the image (the lens's focal length where it was fitted)."""
         width, height = self.image_size
-        focal = _focal(self.homography, (width - 1) / 2, (height - 1) / 2) or FALLBACK_FOCAL_FRACTION * width
+        focal = self.lens.focal if self.lens is not None else None
+        focal = focal or _focal(self.homography, (width - 1) / 2, (height - 1) / 2) or FALLBACK_FOCAL_FRACTION * width
         intrinsics = np.array([[focal, 0, (width - 1) / 2], [0, focal, (height - 1) / 2], [0, 0, 1]])
         columns = np.linalg.inv(intrinsics) @ self.homography
         scale = 1.0 / np.linalg.norm(columns[:, 0])
@@ -87,13 +97,15 @@ class CameraCalibration:
             "homography": self.homography.tolist(),
             "error_px": round(self.error_px, 4),
             "markers": self.markers,
+            "lens": None if self.lens is None else self.lens.to_json(),
         }
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> CameraCalibration:
+        lens = data.get("lens")
         return cls(
             data["camera"], tuple(data["image_size"]), np.array(data["homography"], float), data["error_px"],
-            data["markers"],
+            data["markers"], None if lens is None else Lens.from_json(lens),
         )  # fmt: skip
 
 
@@ -121,9 +133,16 @@ def detect_board(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     return objects.reshape(-1, 3)[:, :2], pixels.reshape(-1, 2).astype(np.float64), len(ids)
 
 
-def fit(camera: str, image: np.ndarray, where: board.BoardArgs, max_error_px: float) -> CameraCalibration:
-    """The homography from the board found in `image`, lying on the table as `where` says; one-line errors
-    when the board is not found or the fit is worse than `max_error_px`."""
+Bounds = tuple[tuple[float, float], tuple[float, float]]
+
+
+def fit(
+    camera: str, image: np.ndarray, where: board.BoardArgs, max_error_px: float, workspace: Bounds,
+    lens: bool = True,
+) -> CameraCalibration:  # fmt: skip
+    """The lens and homography from the board found in `image`, lying on the table as `where` says (`lens=False`:
+    the homography alone); one-line errors when the board is not found, the fit is worse than `max_error_px`, or
+    the lens is too uncertain over the `workspace` ((x_min, y_min), (x_max, y_max)) to trust."""
     objects, pixels, markers = detect_board(image)
     if markers < MIN_MARKERS:
         seen = "no marker" if markers == 0 else f"only {markers} of {board.COLUMNS * board.ROWS} markers"
@@ -132,15 +151,42 @@ def fit(camera: str, image: np.ndarray, where: board.BoardArgs, max_error_px: fl
             "in the camera's view, well lit, and try again"
         )
     table = board.board_to_table(objects, where)
-    homography, _ = cv2.findHomography(table, pixels, 0)
-    calibration = CameraCalibration(camera, (image.shape[1], image.shape[0]), homography, 0.0, markers)
+    size = (image.shape[1], image.shape[0])
+    fitted = None
+    if lens:
+        plain = cv2.findHomography(table, pixels, 0)[0]
+        fitted = fit_lens(table, pixels, size, _focal(plain, (size[0] - 1) / 2, (size[1] - 1) / 2))
+    homography = cv2.findHomography(table, pixels if fitted is None else fitted.undistort(pixels), 0)[0]
+    calibration = CameraCalibration(camera, size, homography, 0.0, markers, fitted)
     error = float(np.sqrt(np.mean(np.sum((calibration.to_pixels(table) - pixels) ** 2, axis=1))))
     if error > max_error_px:
         raise CalibrationError(
             f"camera {camera}: reprojection error {error:.2f} px is above --max_error_px={max_error_px:g}; the board "
             "is not flat, or is printed scaled (print at 100%), or the camera moved: flatten it and try again"
         )
-    return CameraCalibration(camera, calibration.image_size, homography, error, markers)
+    if fitted is not None:
+        _check_spread(calibration, table, pixels, workspace)
+    return replace(calibration, error_px=error)
+
+
+def _check_spread(calibration: CameraCalibration, table: np.ndarray, pixels: np.ndarray, workspace: Bounds) -> None:
+    """Refuse a lens the board pins too loosely for the workspace's points in view."""
+    (x0, y0), (x1, y1) = workspace
+    grid = np.array([[x, y] for x in np.linspace(x0, x1, 7) for y in np.linspace(y0, y1, 9)])
+    seen = calibration.to_pixels(grid)
+    width, height = calibration.image_size
+    inside = np.all((seen >= 0) & (seen <= (width - 1, height - 1)), axis=1)
+    if not inside.any():
+        raise CalibrationError(
+            f"camera {calibration.camera}: the task's workspace is not in view; aim the camera at the table"
+        )
+    spread = spread_m(table, pixels, calibration.lens, grid[inside])
+    if spread > MAX_SPREAD_M:
+        raise CalibrationError(
+            f"camera {calibration.camera}: the board covers too little of the view to measure the lens (up to "
+            f"{spread * 100:.1f} cm uncertain at the workspace's edge); lay it nearer the image's edge, or nearer the "
+            "camera, and give its new --board.x/--board.y"
+        )
 
 
 def save(path: Path, calibrations: list[CameraCalibration], where: board.BoardArgs) -> None:
@@ -162,7 +208,7 @@ def load(path: Path) -> dict[str, CameraCalibration]:
         raise CalibrationError(f"{path}: no table calibration; {redo}")
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-        if data.get("version") != CALIBRATION_VERSION:
+        if data.get("version") not in READABLE_VERSIONS:
             raise CalibrationError(f"{path}: calibration version {data.get('version')!r}, expected "
                                    f"{CALIBRATION_VERSION}; {redo}")  # fmt: skip
         return {name: CameraCalibration.from_json(item) for name, item in data["cameras"].items()}

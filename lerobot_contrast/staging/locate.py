@@ -26,6 +26,7 @@ MIN_PIXELS = 12  # smaller blobs are noise, or an object mostly hidden (by the a
 # A blob counts as the object when its area is within these multiples of the object's footprint seen from the camera
 # (its top and sides show too); anything else is clutter of the same colour, or the object mostly hidden.
 AREA_RANGE = (0.25, 6.0)
+OUTLINE_POINTS = 16  # per edge of the workspace's outline
 
 
 def workspace_mask(
@@ -33,10 +34,13 @@ def workspace_mask(
 ) -> np.ndarray:
     """Pixels whose table point lies inside `bounds` ((x_min, y_min), (x_max, y_max)), as a uint8 mask."""
     (x0, y0), (x1, y1) = bounds
-    corners = calibration.to_pixels(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+    # Each edge sampled along its length: through a wide-angle lens the workspace's straight edges are curves.
+    along = np.linspace(0, 1, OUTLINE_POINTS, endpoint=False)[:, None]
+    corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    outline = np.concatenate([a + along * (b - a) for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True)])
     width, height = calibration.image_size
     mask = np.zeros((height, width), np.uint8)
-    cv2.fillPoly(mask, [np.round(corners).astype(np.int32)], 255)
+    cv2.fillPoly(mask, [np.round(calibration.to_pixels(outline)).astype(np.int32)], 255)
     return mask
 
 

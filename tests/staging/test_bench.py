@@ -35,7 +35,7 @@ OFF = 0.05  # the clumsy operator's slip: 5 cm to the robot's left
 
 @pytest.fixture(scope="module")
 def calibration():
-    return homography.fit("top", board_frame(TabletopRenderer()), WHERE, max_error_px=1.0)
+    return homography.fit("top", board_frame(TabletopRenderer()), WHERE, 1.0, ((0.15, -0.25), (0.45, 0.25)))
 
 
 class Hands(LanguageTableSim):

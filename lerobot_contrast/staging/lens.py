@@ -1,0 +1,113 @@
+"""The camera's lens: OpenCV's radial model (k1, principal point at the image's centre, square pixels) fitted from the
+board's marker corners in one view, and how far its uncertainty moves points across the workspace.
+
+A wide-angle webcam bends straight lines (k1 about -0.3): a homography alone fits the board under half a pixel yet is
+centimetres off at the workspace's edges, past the board. Points are undistorted before the homography, and the
+targets drawn on the live view are distorted back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import cv2
+import numpy as np
+
+ITERATIONS = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)  # undistorting far from the centre
+# One view of a board fixes the principal point poorly and tangential terms not at all: only focal length and k1 are
+# fitted. k2 trades off against k1 over a board that covers part of the frame, and is left at 0.
+FLAGS = (
+    cv2.CALIB_USE_INTRINSIC_GUESS
+    | cv2.CALIB_FIX_PRINCIPAL_POINT
+    | cv2.CALIB_FIX_ASPECT_RATIO
+    | cv2.CALIB_ZERO_TANGENT_DIST
+    | cv2.CALIB_FIX_K2
+    | cv2.CALIB_FIX_K3
+)
+SIGMAS = 3.0  # the lens's spread is judged at k1 +- 3 standard deviations
+
+
+@dataclass(frozen=True)
+class Lens:
+    """Pixels follow OpenCV's model: ideal pixel (focal * x + cx, focal * y + cy) with (x, y) scaled by
+    1 + k1 r^2 + k2 r^4."""
+
+    focal: float
+    centre: tuple[float, float]
+    k1: float
+    k2: float = 0.0
+    k1_sigma: float = 0.0  # the fit's standard deviation of k1
+
+    @property
+    def matrix(self) -> np.ndarray:
+        return np.array([[self.focal, 0, self.centre[0]], [0, self.focal, self.centre[1]], [0, 0, 1]])
+
+    @property
+    def coefficients(self) -> np.ndarray:
+        return np.array([self.k1, self.k2, 0.0, 0.0, 0.0])
+
+    def undistort(self, pixels: np.ndarray) -> np.ndarray:
+        """Pixels (N, 2) seen through the lens -> where a lens-free camera with the same focal length sees them."""
+        points = np.asarray(pixels, np.float64).reshape(-1, 1, 2)
+        if len(points) == 0:
+            return points.reshape(0, 2)
+        return cv2.undistortPointsIter(points, self.matrix, self.coefficients, None, self.matrix, ITERATIONS).reshape(
+            -1, 2
+        )
+
+    def distort(self, ideal: np.ndarray) -> np.ndarray:
+        """The inverse of `undistort`."""
+        ideal = np.asarray(ideal, np.float64).reshape(-1, 2)
+        rays = np.column_stack([(ideal - self.centre) / self.focal, np.ones(len(ideal))])
+        if len(rays) == 0:
+            return ideal
+        pixels, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), self.matrix, self.coefficients)
+        return pixels.reshape(-1, 2)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "model": "opencv_radial",
+            "focal_px": round(self.focal, 3),
+            "centre_px": [round(c, 3) for c in self.centre],
+            "k1": round(self.k1, 6),
+            "k2": round(self.k2, 6),
+            "k1_sigma": round(self.k1_sigma, 6),
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Lens:
+        if data["model"] != "opencv_radial":
+            raise ValueError(f"unknown lens model {data['model']!r}")
+        centre = tuple(float(c) for c in data["centre_px"])
+        return cls(float(data["focal_px"]), centre, float(data["k1"]), float(data["k2"]), float(data["k1_sigma"]))
+
+
+def fit_lens(table: np.ndarray, pixels: np.ndarray, image_size: tuple[int, int], focal: float | None) -> Lens:
+    """The lens that sends the board's points on the table (N, 2) to where they were seen (N, 2); `focal` is the
+    guess (None where one view cannot tell it, looking straight down: then it stays at a typical webcam's)."""
+    width, height = image_size
+    centre = ((width - 1) / 2, (height - 1) / 2)
+    guess = Lens(focal or 0.8 * width, centre, 0.0)
+    objects = np.column_stack([table, np.zeros(len(table))]).astype(np.float32)
+    flags = FLAGS | (cv2.CALIB_FIX_FOCAL_LENGTH if focal is None else 0)
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+    _, matrix, coefficients, *_, deviations, _, _ = cv2.calibrateCameraExtended(
+        [objects], [pixels.astype(np.float32)], image_size, guess.matrix, np.zeros(5), flags=flags, criteria=criteria
+    )
+    sigma = float(deviations.ravel()[4])
+    return Lens(float(matrix[0, 0]), centre, float(coefficients.ravel()[0]), 0.0, sigma if np.isfinite(sigma) else 1.0)
+
+
+def spread_m(table: np.ndarray, pixels: np.ndarray, lens: Lens, workspace: np.ndarray) -> float:
+    """How far (metres) the `workspace` points (M, 2) on the table move when k1 is `SIGMAS` standard deviations off
+    and the homography is refitted to the board: what the lens's uncertainty costs where the board is not."""
+    ideal = cv2.findHomography(table, lens.undistort(pixels), 0)[0]
+    seen = lens.distort(cv2.perspectiveTransform(workspace.reshape(-1, 1, 2), ideal).reshape(-1, 2))
+    worst = 0.0
+    for sign in (-1.0, 1.0):
+        other = replace(lens, k1=lens.k1 + sign * SIGMAS * lens.k1_sigma)
+        homography = cv2.findHomography(table, other.undistort(pixels), 0)[0]
+        back = cv2.perspectiveTransform(other.undistort(seen).reshape(-1, 1, 2), np.linalg.inv(homography))
+        worst = max(worst, float(np.max(np.linalg.norm(back.reshape(-1, 2) - workspace, axis=1))))
+    return worst
