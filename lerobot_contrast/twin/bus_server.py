@@ -1,0 +1,139 @@
+"""The Feetech serial bus of the twin, served on a pseudo-terminal: LeRobot's `FeetechMotorsBus` opens `/dev/pts/N` as it
+would the arm's USB adapter. Protocol 0: PING (broadcast too), READ, WRITE, SYNC_READ, SYNC_WRITE."""
+
+import os
+import select
+import threading
+import time
+import tty
+
+from lerobot_contrast.twin.faults import FaultInjector, FaultsConfig
+from lerobot_contrast.twin.servos import ServoBank
+
+BROADCAST_ID = 0xFE
+PING, READ, WRITE, SYNC_READ, SYNC_WRITE = 0x01, 0x02, 0x03, 0x82, 0x83
+MAX_LENGTH = 250  # the SDK's longest packet
+
+
+def checksum(body: bytes) -> int:
+    """Feetech's checksum: the inverted low byte of the sum of id, length, instruction/error and parameters."""
+    return ~sum(body) & 0xFF
+
+
+def status_packet(servo_id: int, params: bytes = b"", error: int = 0) -> bytes:
+    body = bytes([servo_id, len(params) + 2, error]) + params
+    return b"\xff\xff" + body + bytes([checksum(body)])
+
+
+def take_packets(buffer: bytearray) -> list[tuple[int, int, bytes]]:
+    """Remove the complete instruction packets at the front of `buffer`: (id, instruction, params) each. Noise and
+    packets with a wrong checksum are dropped, as a servo ignores them; an incomplete tail stays for the next read."""
+    packets = []
+    while True:
+        start = buffer.find(b"\xff\xff")
+        if start < 0:
+            del buffer[: max(len(buffer) - 1, 0)]  # keep a lone trailing 0xFF: it may start a header
+            return packets
+        del buffer[:start]
+        if len(buffer) < 4:
+            return packets
+        servo_id, length = buffer[2], buffer[3]
+        if servo_id == 0xFF or length < 2 or length > MAX_LENGTH:
+            del buffer[:1]  # a third 0xFF or a length no packet has: resynchronise one byte on
+            continue
+        if len(buffer) < length + 4:
+            return packets
+        packet = bytes(buffer[: length + 4])
+        del buffer[: length + 4]
+        if packet[-1] == checksum(packet[2:-1]):
+            packets.append((servo_id, packet[4], packet[5:-1]))
+
+
+class BusServer:
+    """Answers instruction packets for the servos of `bank`. With `clocked`, the bank is advanced by the wall-clock time
+    before each packet (no physics running); otherwise whatever steps the physics steps the bank."""
+
+    def __init__(self, bank: ServoBank, faults: FaultsConfig | None = None, clocked: bool = False):
+        self.bank = bank
+        self.faults = FaultInjector(faults)
+        self.clocked = clocked
+        self.port: str | None = None
+        self._thread: threading.Thread | None = None
+        self._fds: list[int] = []
+        self._last_step = time.monotonic()
+
+    def start(self) -> str:
+        """Open the pseudo-terminal and serve it on a daemon thread; returns the port to give LeRobot."""
+        master, slave = os.openpty()
+        tty.setraw(slave)  # no echo, no line editing: bytes pass as on a serial line
+        wake_read, wake_write = os.pipe()
+        self._fds = [master, slave, wake_read, wake_write]
+        self.port = os.ttyname(slave)
+        self._last_step = time.monotonic()
+        self._thread = threading.Thread(target=self._serve, name=f"twin-bus {self.port}", daemon=True)
+        self._thread.start()
+        return self.port
+
+    def stop(self) -> None:
+        if self._thread is None:
+            return
+        os.write(self._fds[3], b"x")
+        self._thread.join(timeout=5)
+        for fd in self._fds:
+            os.close(fd)
+        self._thread, self._fds = None, []
+
+    def __enter__(self) -> str:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    def _serve(self) -> None:
+        master, _, wake, _ = self._fds
+        buffer = bytearray()
+        while True:
+            ready, _, _ = select.select([master, wake], [], [])
+            if wake in ready:
+                return
+            buffer += os.read(master, 4096)
+            for servo_id, instruction, params in take_packets(buffer):
+                reply = self.answer(servo_id, instruction, params)
+                if reply:
+                    os.write(master, reply)
+
+    def answer(self, servo_id: int, instruction: int, params: bytes) -> bytes:
+        """The bytes the bus sends back for one instruction packet (status packets, after faults)."""
+        if self.clocked:
+            now = time.monotonic()
+            self.bank.step(now - self._last_step)
+            self._last_step = now
+        packets = self._status_packets(servo_id, instruction, params)
+        if not packets:
+            return b""
+        moving = any(self.bank.memory(i).read("Moving") for i in self.bank.ids)
+        return b"".join(self.faults.apply(packet, moving) for packet in packets)
+
+    def _status_packets(self, servo_id: int, instruction: int, params: bytes) -> list[bytes]:
+        bank, present = self.bank, servo_id in self.bank.ids
+        if instruction == PING and servo_id == BROADCAST_ID:
+            return [status_packet(i) for i in bank.ids]
+        if instruction == PING and present:
+            return [status_packet(servo_id)]
+        if instruction == READ and present and len(params) == 2:
+            return [status_packet(servo_id, bank.bus_read(servo_id, params[0], params[1]))]
+        if instruction == WRITE and params and (present or servo_id == BROADCAST_ID):
+            targets = bank.ids if servo_id == BROADCAST_ID else [servo_id]
+            for i in targets:
+                bank.bus_write(i, params[0], params[1:])
+            replies = servo_id != BROADCAST_ID and bank.memory(servo_id).read("Response_Status_Level")
+            return [status_packet(servo_id)] if replies else []
+        if instruction == SYNC_READ and len(params) >= 2:
+            addr, length = params[0], params[1]
+            return [status_packet(i, bank.bus_read(i, addr, length)) for i in params[2:] if i in bank.ids]
+        if instruction == SYNC_WRITE and len(params) >= 2:
+            addr, length = params[0], params[1]
+            for offset in range(2, len(params) - length, length + 1):
+                if params[offset] in bank.ids:
+                    bank.bus_write(params[offset], addr, params[offset + 1 : offset + 1 + length])
+        return []

@@ -1,0 +1,148 @@
+"""LeRobot's own `SO101Follower`, unmodified, drives the twin's Feetech bus on a pseudo-terminal (no MuJoCo)."""
+
+import time
+
+import pytest
+from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
+
+from lerobot_contrast.twin.bus_server import BusServer
+from lerobot_contrast.twin.calibration_file import bank_calibration, write_calibration_file
+from lerobot_contrast.twin.faults import FaultsConfig
+from lerobot_contrast.twin.servos import ServoBank
+
+NAMES = ["shoulder_pan", "shoulder_lift", "elbow_flex", "wrist_flex", "wrist_roll", "gripper"]
+LIMITS = {name: (800, 3300) for name in NAMES} | {"wrist_roll": (0, 4095), "gripper": (2000, 3400)}
+OFFSETS = {name: 150 * k - 300 for k, name in enumerate(NAMES)}  # negative ones exercise the sign-magnitude encoding
+START = {"shoulder_pan": 2050, "shoulder_lift": 1200, "elbow_flex": 3000, "wrist_flex": 2048, "wrist_roll": 1500,
+         "gripper": 2100}  # fmt: skip
+POSE = {"shoulder_pan.pos": 30.0, "shoulder_lift.pos": -40.0, "elbow_flex.pos": 45.0, "wrist_flex.pos": -10.0,
+        "wrist_roll.pos": 90.0, "gripper.pos": 80.0}  # fmt: skip
+
+
+def degrees(name: str, raw: float) -> float:
+    """LeRobot's reading of a raw position (`use_degrees`; the gripper in 0-100), from the calibration's range."""
+    low, high = LIMITS[name]
+    if name == "gripper":
+        return (raw - low) / (high - low) * 100
+    return (raw - (low + high) / 2) * 360 / 4095
+
+
+@pytest.fixture
+def twin(tmp_path):
+    """Start a bus for a fresh arm with the given faults; returns (bank, server, robot) with the calibration written."""
+    started = []
+
+    def start(faults: FaultsConfig | None = None, **robot_flags):
+        bank = ServoBank({n: (k + 1, "sts3215") for k, n in enumerate(NAMES)}, START, homing_offsets=OFFSETS,
+                         limits=LIMITS)  # fmt: skip
+        server = BusServer(bank, faults=faults, clocked=True)
+        port = server.start()
+        started.append(server)
+        write_calibration_file(bank, "twin", tmp_path)
+        robot = SO101Follower(SO101FollowerConfig(port=port, id="twin", calibration_dir=tmp_path, **robot_flags))
+        return bank, server, robot
+
+    yield start
+    for server in started:
+        server.stop()
+
+
+def reach(robot, goal: dict[str, float], timeout: float) -> tuple[float, dict[str, float]]:
+    """Seconds until every joint reads within 2 degrees of `goal` (or the timeout), and the last reading."""
+    start = time.perf_counter()
+    while True:
+        obs = robot.get_observation()
+        if all(abs(obs[k] - v) < 2 for k, v in goal.items()) or time.perf_counter() - start > timeout:
+            return time.perf_counter() - start, obs
+
+
+def test_connect_reads_the_six_joints_without_asking_to_calibrate(twin):
+    bank, _, robot = twin()
+    robot.connect()  # input() under pytest would raise: a mismatch would fail here
+    obs = robot.get_observation()
+    assert obs == pytest.approx({f"{n}.pos": degrees(n, START[n]) for n in NAMES})
+    assert robot.bus.read_calibration() == bank_calibration(bank)
+    assert all(bank.torque_enabled(n) for n in NAMES)
+    memory = bank.memory(6)  # what configure() wrote landed in the registers
+    written = [memory.read(name) for name in ("P_Coefficient", "Max_Torque_Limit", "Return_Delay_Time")]
+    assert written == [16, 500, 0]
+    assert memory.read("Phase") & 0x10 == 0
+    robot.disconnect()
+    assert not any(bank.torque_enabled(n) for n in NAMES)
+
+
+def test_a_commanded_pose_is_reached_within_2_degrees_in_1_s(twin):
+    _, _, robot = twin()
+    robot.connect()
+    sent = robot.send_action(POSE)
+    assert sent == POSE
+    seconds, obs = reach(robot, POSE, timeout=1.0)
+    assert seconds < 1.0, obs
+    robot.disconnect()
+
+
+def test_max_relative_target_clips_and_limits_bound_the_joint(twin):
+    bank, _, robot = twin(max_relative_target=5.0)
+    robot.connect()
+    before = robot.get_observation()["shoulder_pan.pos"]
+    sent = robot.send_action({"shoulder_pan.pos": before + 40})
+    assert sent["shoulder_pan.pos"] == pytest.approx(before + 5)
+    time.sleep(0.3)
+    assert robot.get_observation()["shoulder_pan.pos"] == pytest.approx(before + 5, abs=0.2)
+    robot.disconnect()
+    bank, _, robot = twin()
+    robot.connect()
+    robot.send_action({"elbow_flex.pos": 170.0})  # past Max_Position_Limit: the servo stops at the limit
+    time.sleep(0.3)
+    assert robot.get_observation()["elbow_flex.pos"] == pytest.approx(degrees("elbow_flex", LIMITS["elbow_flex"][1]))
+    robot.disconnect()
+
+
+def test_signed_registers_round_trip_through_lerobot(twin):
+    bank, _, robot = twin()
+    robot.connect()
+    robot.bus.write("Homing_Offset", "wrist_flex", -1234)
+    assert robot.bus.read("Homing_Offset", "wrist_flex") == -1234 == bank.memory(4).read("Homing_Offset")
+    robot.send_action({"shoulder_pan.pos": -80.0})  # moving toward lower raw values: a negative velocity
+    time.sleep(0.1)
+    assert robot.bus.read("Present_Velocity", "shoulder_pan") < -1000
+    assert robot.bus.broadcast_ping() == {k + 1: 777 for k in range(6)}
+    robot.disconnect()
+
+
+def test_corrupted_replies_are_retried_through(twin):
+    _, server, robot = twin(FaultsConfig(corrupt=0.05, seed=3, while_moving=True), num_read_retries=10)
+    robot.connect()
+    robot.send_action(POSE)
+    seconds, obs = reach(robot, POSE, timeout=2.0)
+    assert seconds < 2.0, obs
+    assert server.faults.corrupted > 0
+    robot.disconnect()
+
+
+def test_when_retries_run_out_lerobot_raises_its_error(twin):
+    _, server, robot = twin(FaultsConfig(corrupt=1.0, while_moving=True))
+    robot.connect()  # nothing moves yet: a clean line
+    robot.send_action(POSE)
+    with pytest.raises(ConnectionError, match="sync read 'Present_Position'.*after 3 tries.*Incorrect status"):
+        robot.get_observation()
+    assert server.faults.corrupted >= 3
+
+
+def test_a_silent_bus_fails_the_connect_with_lerobots_error(twin):
+    _, server, robot = twin(FaultsConfig(drop=1.0))
+    with pytest.raises(RuntimeError, match="motor check failed"):
+        robot.connect()
+    assert server.faults.dropped > 0
+
+
+def test_bad_input_gets_one_line(tmp_path):
+    with pytest.raises(ValueError, match=r"--faults.corrupt=1.5 is not a rate"):
+        FaultsConfig(corrupt=1.5)
+    bank = ServoBank({"a": (1, "sts3215")}, {"a": 2048})
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OSError, match="cannot write the twin's calibration file") as error:
+        write_calibration_file(bank, "twin", tmp_path / "file")
+    assert "\n" not in str(error.value)
+    with pytest.raises(ValueError, match="initial_raw names"):
+        ServoBank({"a": (1, "sts3215")}, {"b": 2048})
