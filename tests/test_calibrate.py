@@ -114,3 +114,23 @@ def test_the_robots_cameras_are_read_with_evals_robot_flags(tmp_path, capsys):
     assert main(["--robot.type=language_table_sim", f"--output={tmp_path / 'cal.json'}"]) == 2
     error = capsys.readouterr().err.strip()
     assert error.startswith("error: camera top: board not found") and "\n" not in error
+
+
+@pytest.mark.parametrize(
+    ("flag", "said"),
+    [
+        ("--max_error_px=-1", "error: --max_error_px=-1: give a positive number of pixels"),
+        ("--max_error_px=0", "error: --max_error_px=0: give a positive number of pixels"),
+        ("--write_board={tmp}/board.jpg", "error: --write_board={tmp}/board.jpg: writes a .pdf or a .png, not .jpg"),
+        ("--write_board={tmp}/a_file/board.pdf", "error: --write_board={tmp}/a_file/board.pdf: cannot write it ("),
+    ],
+)
+def test_calibrates_bad_input_is_one_line_and_writes_nothing(flag, said, tmp_path, capsys):
+    (tmp_path / "a_file").write_text("")  # a file where the board's folder should be: no folder can be made there
+    frame = tmp_path / "frame.png"
+    cv2.imwrite(str(frame), np.full((48, 64, 3), 128, np.uint8))
+    before = sorted(tmp_path.rglob("*"))
+    assert main([flag.format(tmp=tmp_path), f"--image={frame}", f"--output={tmp_path / 'cal.json'}"]) == 2
+    error = capsys.readouterr().err
+    assert error.startswith(said.format(tmp=tmp_path)) and error.count("\n") == 1
+    assert sorted(tmp_path.rglob("*")) == before

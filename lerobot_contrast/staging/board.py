@@ -97,7 +97,9 @@ def write_page(path: Path, dpi: int = DPI) -> str:
     except OSError as error:
         with suppress(OSError):  # where the folder is not one, there is nothing to remove
             temporary.unlink(missing_ok=True)
+        nearest = next(folder for folder in path.parents if folder.exists())  # a file where a folder should be?
+        reason = error.strerror or error if nearest.is_dir() else f"{nearest} is not a folder"
         raise UserError(
-            f"--write_board={path}: cannot write it ({error.strerror or error}); name a file in a folder you can write"
+            f"--write_board={path}: cannot write it ({reason}); name a file in a folder you can write"
         ) from None
     return f"{path}: {printed_size_text()}"

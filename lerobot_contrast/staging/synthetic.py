@@ -14,6 +14,7 @@ from lerobot_contrast.staging import board
 
 TABLE_RGB = np.array([150.0, 138.0, 118.0])
 SUPERSAMPLE = 2  # rendered at twice the size, then averaged down: the board's edges antialiased as a sensor's are
+STRIDE = 8  # (supersampled) pixels between the points where the page's position is computed exactly
 ITERATIONS = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)  # undistorting far from the centre
 
 
@@ -101,11 +102,16 @@ def board_photo(camera: ObliqueCamera, where: board.BoardArgs, seed: int = 0, qu
     page, per_m = board.page_image(dpi=200)
     margin = round(board.MARGIN_M * per_m)
     size = (camera.width * SUPERSAMPLE, camera.height * SUPERSAMPLE)
-    columns, rows = np.meshgrid(np.arange(size[0]), np.arange(size[1]))
-    pixels = (np.column_stack([columns.ravel(), rows.ravel()]) + 0.5) / SUPERSAMPLE - 0.5
-    on_board = _table_to_board(camera.table_points(pixels), where) * per_m + margin - 0.5
-    map_x = np.nan_to_num(on_board[:, 0], nan=-1e4).reshape(size[::-1]).astype(np.float32)
-    map_y = np.nan_to_num(on_board[:, 1], nan=-1e4).reshape(size[::-1]).astype(np.float32)
+    # Where each pixel sees the page varies smoothly: computed at the centre of every STRIDE x STRIDE block, then
+    # interpolated (cv2.resize's linear sampling puts those centres exactly where they belong).
+    coarse = (size[0] // STRIDE, size[1] // STRIDE)
+    columns, rows = np.meshgrid(np.arange(coarse[0]), np.arange(coarse[1]))
+    samples = np.column_stack([columns.ravel(), rows.ravel()]) * STRIDE + (STRIDE - 1) / 2
+    on_board = _table_to_board(camera.table_points((samples + 0.5) / SUPERSAMPLE - 0.5), where) * per_m + margin - 0.5
+    map_x, map_y = (
+        cv2.resize(np.nan_to_num(on_board[:, axis], nan=-1e4).reshape(coarse[::-1]), size).astype(np.float32)
+        for axis in (0, 1)
+    )
     paper = cv2.remap(page, map_x, map_y, cv2.INTER_LINEAR, borderValue=0).astype(np.float64) / 255
     covered = cv2.remap(np.ones_like(page), map_x, map_y, cv2.INTER_NEAREST, borderValue=0) > 0
     image = np.where(covered[..., None], paper[..., None] * (235.0, 235.0, 230.0), TABLE_RGB)
