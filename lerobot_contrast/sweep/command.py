@@ -78,9 +78,15 @@ def run_sweep(cfg: SweepConfig, console: Console) -> int:
 def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[str, CellOutcome]:
     """Run the cells of `spec` (a sweep file's contents, read from cfg.sweep) that are not complete yet, then
     write the sweep index and results table; every cell's outcome by name (none with --dry_run)."""
-    # Ray, pandas, LeRobot and torch load here, once the flags are known to be sound.
+    # Ray, pandas, LeRobot and torch load here, once the flags are known to be sound; a wrong address or token is
+    # said before LeRobot and torch load.
+    from lerobot_contrast.sweep.cluster import join, reach
+
+    if cfg.ray.address and not cfg.dry_run:
+        reach(cfg.ray.address)
     from lerobot_contrast.record.sweep_dir import is_complete, write_index, write_sweep_results
-    from lerobot_contrast.sweep.ray_pool import check_gpus, run_cells, start_ray
+    from lerobot_contrast.sweep.carry import Carry, mark_folder
+    from lerobot_contrast.sweep.ray_pool import check_gpus, run_cells
 
     folder = sweep_folder(cfg, spec)
     cells = sweep_cells(cfg.sweep, spec, folder)
@@ -93,7 +99,7 @@ def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[st
     outcomes = {c.name: _finished(c) for c in cells if is_complete(Path(c.config.output_dir))}
     todo = [cell for cell in cells if cell.name not in outcomes]
     if todo:  # Ray is joined, and its GPUs checked, before the sweep folder is written
-        start_ray(cfg.ray)
+        join(cfg.ray)
         check_gpus(todo, cfg.ray.gpus_per_cell)
     folder.mkdir(parents=True, exist_ok=True)
     write_index(folder, index_entries(cells, outcomes))
@@ -101,7 +107,10 @@ def execute(cfg: SweepConfig, spec: dict[str, Any], console: Console) -> dict[st
         console.print(f"{len(outcomes)} of {len(cells)} cells already complete", highlight=False, soft_wrap=True)
     if todo:
         report = partial(_report, console, folder)
-        ran = run_cells(todo, planned, cfg.max_retries, report, console, cfg.ray.gpus_per_cell)
+        # On a cluster, nodes that do not find this folder's id in it run their cells on their own disk.
+        carry = Carry(mark_folder(folder), folder.resolve(), None, cfg.ray.bring_back_recordings)
+        carry = carry if cfg.ray.address else None
+        ran = run_cells(todo, planned, cfg.max_retries, report, console, cfg.ray.gpus_per_cell, carry)
         outcomes |= {outcome.name: outcome for outcome in ran}
     entries = index_entries(cells, outcomes)
     write_index(folder, entries)

@@ -1,10 +1,10 @@
 """The sweep's cells as Ray tasks: one CPU each (and --ray.gpus_per_cell GPUs for a policy on cuda), retried on
-another worker when theirs dies, watched through their journals for the progress view."""
+another worker when theirs dies, watched through their journals for the progress view; on a cluster, with this
+run directory brought back from nodes that do not see the sweep folder."""
 
 from __future__ import annotations
 
-import logging
-import os
+import dataclasses
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -13,14 +13,13 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.sweep.carry import Carry, pack, unpack
 from lerobot_contrast.sweep.cells import Cell, sharing_predecessors
-from lerobot_contrast.sweep.settings import RayArgs
+from lerobot_contrast.sweep.settings import RayArgs as RayArgs  # where the scripts import it
+from lerobot_contrast.sweep.shipping import ONE_THREAD
 from lerobot_contrast.sweep.worker import CellOutcome, run_cell, wants_gpu
 
 POLL_S = 0.5
-# Each cell runs on one thread: the cells are the parallelism. Set when the worker process starts, before its
-# numerical libraries read them (Ray would otherwise pass on the driver's OMP_NUM_THREADS).
-ONE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
 
 
 def trials_recorded(cells: Sequence[Cell], finished: dict[str, int]) -> int:
@@ -35,15 +34,6 @@ def _journal_lines(run_dir: Path) -> int:
             return sum(block.count(b"\n") for block in iter(lambda: handle.read(1 << 20), b""))
     except FileNotFoundError:
         return 0
-
-
-def start_ray(args: RayArgs) -> None:
-    """Join the cluster `args` names, or start a local Ray; a Ray this process already joined is used as is."""
-    if ray.is_initialized():
-        return
-    local = {"num_cpus": args.num_cpus or os.cpu_count(), "num_gpus": args.num_gpus, "include_dashboard": False}
-    quiet = {"log_to_driver": False, "logging_level": logging.WARNING}
-    ray.init(address=args.address, **quiet, **({} if args.address else local))
 
 
 def cell_gpus(cell: Cell, gpus_per_cell: float) -> float:
@@ -76,12 +66,14 @@ def run_cells(
     report: Callable[[CellOutcome], None],
     console: Console,
     gpus_per_cell: float = 1.0,
+    carry: Carry | None = None,
 ) -> list[CellOutcome]:
     """Run every cell as a Ray task and return their outcomes in the cells' order, calling `report` as each ends.
     A cell that would share episodes with an earlier one (`sharing_predecessors`) waits for it to end, so it takes
     that cell's episodes rather than running them beside it, unless a CPU would otherwise stand idle: then the
     earliest waiting cell starts at once (sharing what it finds), and the sweep takes no longer than without
-    waiting."""
+    waiting. `carry` (on a cluster) takes the driver's copy of a started cell's run directory to a node that does
+    not see the sweep folder; what such a node sends back lands there as the cell ends."""
     task = ray.remote(run_cell)
     cpus = max(1, int(ray.cluster_resources().get("CPU", 1)))
 
@@ -92,7 +84,7 @@ def run_cells(
             max_retries=max_retries,
             name=f"cell {cell.name}",
             runtime_env={"env_vars": ONE_THREAD},
-        ).remote(cell.name, cell.config, cell.shared)
+        ).remote(cell.name, cell.config, cell.shared, _carried(carry, Path(cell.config.output_dir)))
         refs[ref] = cell
         pending.append(ref)
 
@@ -114,6 +106,9 @@ def run_cells(
             ready, pending[:] = ray.wait(pending, num_returns=len(pending), timeout=POLL_S)
             for ref in ready:
                 outcome = _outcome(refs[ref], ref, max_retries)
+                if outcome.run_dir is not None:
+                    unpack(outcome.run_dir, Path(refs[ref].config.output_dir))
+                    outcome = dataclasses.replace(outcome, run_dir=None)
                 outcomes[outcome.name] = outcome
                 if outcome.status == "complete":
                     finished[outcome.name] = planned[outcome.name]
@@ -125,6 +120,13 @@ def run_cells(
             progress.update(cell_bar, completed=len(outcomes))
             progress.update(trial_bar, completed=trials_recorded(cells, finished))
     return [outcomes[cell.name] for cell in cells]
+
+
+def _carried(carry: Carry | None, run_dir: Path) -> Carry | None:
+    """`carry` with the driver's copy of a started cell's run directory, which a node without the folder resumes."""
+    if carry is None or not (run_dir / "config.json").is_file():
+        return carry
+    return dataclasses.replace(carry, run_dir=pack(run_dir))
 
 
 def _outcome(cell: Cell, ref: ray.ObjectRef, max_retries: int) -> CellOutcome:

@@ -10,8 +10,9 @@ from lerobot_contrast.contrast.errors import UserError
 
 @dataclass
 class RayArgs:
-    # The Ray cluster to join: auto (the one `ray start --head` runs on this machine) or ray://HOST:10001 (a
-    # remote head's client port). Default: start a Ray for this sweep on this machine only.
+    # The Ray cluster to join: auto (the one `ray start --head` runs on this machine), HOST:6379 (a head's port, from
+    # a node of the cluster) or ray://HOST:10001 (a head's client port, from any machine). This project's code is
+    # shipped to its nodes. Default: start a Ray for this sweep on this machine only.
     address: str | None = None
     # CPUs of the Ray started on this machine, which is how many cells run at once (default: all its cores).
     num_cpus: int | None = None
@@ -20,6 +21,9 @@ class RayArgs:
     gpus_per_cell: float = 1.0
     # GPUs of the Ray started on this machine (default: those Ray finds).
     num_gpus: int | None = None
+    # On a node that cannot see the sweep folder (no shared storage), whether a cell's Rerun recordings and dataset
+    # come back to it with the cell's journal, results and summary.
+    bring_back_recordings: bool = True
 
     def check(self) -> None:
         """Refuse a GPU request Ray cannot express (draccus would hide why, so it is checked after parsing)."""
@@ -42,7 +46,8 @@ class SweepConfig:
     # `name` standing for them in the cell's directory name), and optionally `output_dir`.
     sweep: Path | None = None
     # The sweep folder, which holds one run directory per cell (default: the sweep file's output_dir, else
-    # outputs/sweeps/<sweep file name>). On a cluster it must be storage every node mounts at the same path.
+    # outputs/sweeps/<sweep file name>). On a cluster, nodes that do not see it write each cell on their own disk
+    # and send its run directory back here as the cell ends.
     output_dir: Path | None = None
     # Continue the sweep in the sweep folder: skip complete cells and resume the others from their journals.
     resume: bool = False

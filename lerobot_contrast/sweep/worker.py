@@ -1,11 +1,13 @@
 """One sweep cell, as a Ray worker runs it: its EvalConfig as an Evaluation run by the spine, resumed from its
-journal wherever an earlier attempt left one. A learned policy loads once per worker process, not per cell."""
+journal wherever an earlier attempt left one, on the node's own disk where it cannot see the sweep folder. A learned
+policy loads once per worker process, not per cell."""
 
 from __future__ import annotations
 
 import dataclasses
 import json
 import os
+import re
 import time
 import traceback
 from dataclasses import dataclass
@@ -21,8 +23,9 @@ from lerobot_contrast.evaluation import run
 from lerobot_contrast.policies import PRETRAINED_BUILD, Policy, make_policy, policy_entry
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.record.shared_episodes import SharedEpisodes, weights_digest
+from lerobot_contrast.record.shared_episodes import FOLDER, SharedEpisodes, weights_digest
 from lerobot_contrast.record.sweep_dir import is_complete
+from lerobot_contrast.sweep.carry import Carry, local_run_dir, pack
 from lerobot_contrast.sweep.cells import policy_shares_episodes
 
 if TYPE_CHECKING:
@@ -31,6 +34,7 @@ if TYPE_CHECKING:
 # Learned policies loaded in this process, by their settings and the robot features they were built for.
 # Scripted policies are not kept: they are cheap to build and hold on to their cell's robot.
 _LOADED: dict[str, Policy] = {}
+HUB_ID = re.compile(r"[\w.-]+/[\w.-]+")
 
 
 @dataclass(frozen=True)
@@ -47,29 +51,37 @@ class CellOutcome:
     detail: str | None = None  # the traceback of an unexpected error
     gpus: float = 0.0  # the share of GPUs Ray gave the cell (--ray.gpus_per_cell for a policy on cuda)
     cuda_visible_devices: str | None = None  # the GPUs Ray made visible to the cell, where it gave it any
+    run_dir: bytes | None = None  # the cell's run directory as a tar, from a node that cannot see the sweep folder
 
 
 def wants_gpu(policy: PolicyArgs) -> bool:
     return str(policy.device or "").startswith("cuda")
 
 
-def run_cell(name: str, cfg: EvalConfig, shared: Path | None = None) -> CellOutcome:
+def run_cell(name: str, cfg: EvalConfig, shared: Path | None = None, carry: Carry | None = None) -> CellOutcome:
     """Run (or resume, or find finished) the cell's evaluation in `cfg.output_dir`, taking episodes other cells
     ran from the folder `shared` where given; never raises for the cell's own errors, so one bad cell does not stop
-    the sweep."""
+    the sweep. With `carry` (a sweep on a cluster) and no sight of the sweep folder, it runs on this node's disk
+    and its run directory comes back in the outcome."""
     start, cpu_start = time.perf_counter(), time.process_time()
-
     loaded_before = len(_LOADED)
+    away = carry is not None and not carry.shares_folder()
 
     def outcome(status: str, trials: int = 0, error: str | None = None, detail: str | None = None) -> CellOutcome:
         seconds, cpu_s, loaded = time.perf_counter() - start, time.process_time() - cpu_start, len(_LOADED)
         gpus = _gpus()
+        packed = pack(Path(cfg.output_dir), carry.recordings) if away and Path(cfg.output_dir).is_dir() else None
         return CellOutcome(
             name, status, trials, seconds, cpu_s, _node(), os.getpid(), loaded > loaded_before, error, detail,
-            gpus, os.environ.get("CUDA_VISIBLE_DEVICES") if gpus else None,
+            gpus, os.environ.get("CUDA_VISIBLE_DEVICES") if gpus else None, packed,
         )  # fmt: skip
 
     try:
+        if away:
+            cfg = dataclasses.replace(cfg, output_dir=local_run_dir(carry, name))
+            shared = carry.local_root() / FOLDER if shared else None
+        if carry is not None:
+            _check_policy_path(cfg)
         trials = _run(dataclasses.replace(cfg), shared)
     except UserError as error:
         return outcome("failed", error=str(error))
@@ -78,6 +90,16 @@ def run_cell(name: str, cfg: EvalConfig, shared: Path | None = None) -> CellOutc
             "failed", error=f"{type(error).__name__}: {' '.join(str(error).split())}", detail=traceback.format_exc()
         )
     return outcome("complete", trials)
+
+
+def _check_policy_path(cfg: EvalConfig) -> None:
+    """A policy given by a folder must be at that path on the node: Ray does not carry checkpoints."""
+    path = cfg.policy.path
+    if path and not Path(path).exists() and not HUB_ID.fullmatch(str(path)):
+        raise UserError(
+            f"policy.path {path} is not on node {_node_ip()}: a checkpoint folder must be at that path on every node "
+            "(storage they all mount there), or on the Hub (give its repo id)"
+        )
 
 
 def _run(cfg: EvalConfig, shared: Path | None = None) -> int:
@@ -132,6 +154,12 @@ def _node() -> str | None:
     import ray
 
     return ray.get_runtime_context().get_node_id() if ray.is_initialized() else None
+
+
+def _node_ip() -> str:
+    import ray
+
+    return ray.util.get_node_ip_address() if ray.is_initialized() else "this machine"
 
 
 def _gpus() -> float:

@@ -1,0 +1,46 @@
+"""This project's code, as Ray's runtime environment ships it to a cluster's nodes: each of its packages and its
+distribution's metadata (entry points, LeRobot's plugin discovery) as `py_modules`, from a checkout or an install."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import importlib.util
+from pathlib import Path
+from typing import Any
+
+# The project's distributions a cell may import: the contrast sets and the sibling plugins its tasks use.
+DISTRIBUTIONS = (
+    "lerobot-contrast",
+    "navigation-protocol",
+    "lerobot-robot-locobot",
+    "lerobot-policy-language-table",
+    "lerobot-policy-tabletop-pointer",
+    "lerobot-env-language-table",
+    "lerobot-policy-vln-navigator",
+)
+EXCLUDES = ["__pycache__", "*.pyc"]
+# Each cell runs on one thread: the cells are the parallelism. Set when the worker process starts, before its
+# numerical libraries read them (Ray would otherwise pass on the driver's OMP_NUM_THREADS).
+ONE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+
+
+def shipped_paths() -> list[Path]:
+    """Each installed distribution's package folder and metadata folder (`*.dist-info`): a node puts each on its
+    path, so `import` finds the package and importlib.metadata its entry points, as in this environment."""
+    paths = []
+    for name in DISTRIBUTIONS:
+        try:
+            dist = importlib.metadata.distribution(name)
+        except importlib.metadata.PackageNotFoundError:
+            continue  # not installed here, so no cell of this machine's sweeps uses it
+        spec = importlib.util.find_spec(name.replace("-", "_"))
+        if spec is None or not spec.submodule_search_locations:
+            continue
+        paths.append(Path(next(iter(spec.submodule_search_locations))))
+        paths += [Path(str(dist.locate_file(f))).parent for f in dist.files or () if f.name == "METADATA"][:1]
+    return paths
+
+
+def runtime_env() -> dict[str, Any]:
+    """The runtime environment of a sweep on a cluster: this project's code shipped, one thread per cell."""
+    return {"py_modules": [str(path) for path in shipped_paths()], "excludes": EXCLUDES, "env_vars": ONE_THREAD}
