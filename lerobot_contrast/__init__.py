@@ -3,10 +3,11 @@
 The public API: load a task, perturb its instances, plan, evaluate and summarise. Names are imported on first
 use, so `import lerobot_contrast` stays light (the simulators and LeRobot load only when an evaluation runs)."""
 
+import importlib.metadata
 from importlib import import_module
 from typing import Any
 
-__version__ = "0.1.0"
+__version__ = importlib.metadata.version("lerobot_contrast")
 
 _EXPORTS = {
     "Instance": "lerobot_contrast.contrast.instance",

@@ -1,14 +1,68 @@
-"""The plugin distributions are installed under the names LeRobot's plugin discovery looks for."""
+"""The distributions install under the names LeRobot's plugin discovery looks for, at one version, with a light core,
+extras named for what they add, and console scripts beside the `python -m` forms."""
 
+import ast
 import importlib.metadata
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
+
+import lerobot_contrast
+from lerobot_contrast import cli
+from lerobot_contrast.contrast.errors import UserError
+
+ROOT = Path(__file__).resolve().parents[1]
+DISTRIBUTIONS = (
+    "lerobot_contrast",
+    "navigation_protocol",
+    "lerobot_robot_locobot",
+    "lerobot_policy_language_table",
+    "lerobot_policy_tabletop_pointer",
+    "lerobot_policy_vln_navigator",
+    "lerobot_env_language_table",
+)
+COMMANDS = ("eval", "report", "review", "publish", "calibrate", "sweep", "twin")
 
 
-def test_the_three_distributions_are_installed_with_underscore_names():
-    names = {d.metadata["Name"] for d in importlib.metadata.distributions()}
-    assert {"lerobot_contrast", "lerobot_robot_locobot", "lerobot_policy_language_table"} <= names
-    assert "lerobot[dataset,training,viz]<0.7,>=0.6.1" in importlib.metadata.requires("lerobot_contrast")
+def test_every_distribution_is_installed_under_its_underscore_name_at_the_one_version():
+    versions = {name: importlib.metadata.version(name) for name in DISTRIBUTIONS}
+    assert set(versions.values()) == {lerobot_contrast.__version__}, versions
+
+
+def test_the_core_leaves_ray_the_training_stack_and_the_test_tools_to_extras():
+    core = [r for r in importlib.metadata.requires("lerobot_contrast") if "extra ==" not in r]
+    assert "lerobot[dataset,viz]<0.7,>=0.6.1" in core
+    assert not [r for r in core if r.startswith(("ray", "jax", "flax", "pytest", "mkdocs", "lerobot[training"))]
+    extras = importlib.metadata.metadata("lerobot_contrast").get_all("Provides-Extra")
+    assert {"sweep", "train", "libero", "twin", "docs", "dev"} <= set(extras)
+
+
+def test_each_command_has_a_console_script_in_lerobots_style():
+    scripts = {ep.name: ep.value for ep in importlib.metadata.entry_points(group="console_scripts")}
+    for command in COMMANDS:
+        target = scripts[f"lerobot-contrast-{command}"]
+        assert target in (f"lerobot_contrast.{command}:main", f"lerobot_contrast.cli:{command}")
+        assert (Path(sys.executable).parent / f"lerobot-contrast-{command}").exists()
+
+
+def test_a_missing_extra_is_named_with_the_command_that_installs_it(monkeypatch):
+    cli.require_extra("sweep", "sweep")  # ray is in this environment (the dev extra)
+    monkeypatch.setattr(cli, "find_spec", lambda name: None if name == "ray" else object())
+    with pytest.raises(UserError, match=r"^sweep needs the \[sweep\] extra \(ray not installed\): pip install"):
+        cli.require_extra("sweep", "sweep")
+
+
+def test_the_env_plugins_modules_import_one_way():
+    """No two modules of the env plugin import each other (DESIGN.md), even inside a function."""
+    package = ROOT / "envs/lerobot_env_language_table/lerobot_env_language_table"
+    imports = {}
+    for path in package.glob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        names = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module}
+        imports[path.stem] = {name.rsplit(".", 1)[-1] for name in names if name.startswith(package.name + ".")}
+    assert not [(a, b) for a in imports for b in imports[a] if a in imports.get(b, ())]
 
 
 def test_lerobot_plugin_discovery_imports_both_plugins():
@@ -25,6 +79,6 @@ def test_lerobot_plugin_discovery_imports_both_plugins():
 def test_the_evaluator_and_the_locobot_plugin_both_depend_on_the_navigation_protocol_only():
     """Neither distribution requires the other for VLN: what they share is the small navigation_protocol."""
     for name in ("lerobot_contrast", "lerobot_robot_locobot"):
-        assert "navigation_protocol" in importlib.metadata.requires(name)
+        assert "navigation_protocol<0.3,>=0.2.0" in importlib.metadata.requires(name)
     assert importlib.metadata.requires("navigation_protocol") is None
     assert "lerobot_contrast" not in " ".join(importlib.metadata.requires("lerobot_robot_locobot"))

@@ -9,15 +9,12 @@ from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
 
 from lerobot_contrast.domains.language_table import FAMILIES, board
+from lerobot_env_language_table.errors import EnvFlagError
 
 ALL_FAMILIES = "all"
 CAMERA = "top"
 # Effector x, y then effector-target x, y: the order of the `language_table_sim` robot's observation.state.
 STATE_SIZE = 4
-
-
-class EnvFlagError(SystemExit):
-    """A bad `--env.*` value. LeRobot's commands print a SystemExit's message as one line, without a traceback."""
 
 
 def _features() -> dict[str, PolicyFeature]:

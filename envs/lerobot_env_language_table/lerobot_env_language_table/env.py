@@ -14,7 +14,7 @@ from gymnasium import spaces
 from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.domains.language_table import FAMILIES
 from lerobot_contrast.domains.language_table.env import LANGUAGE_TABLE_ID
-from lerobot_env_language_table.config_language_table import EnvFlagError
+from lerobot_env_language_table.errors import EnvFlagError
 
 PLAN_FILE = "plan.json"
 

@@ -1,0 +1,50 @@
+"""The console scripts of the commands that need an optional extra, and the one line that names a missing extra.
+
+The core commands' scripts (`lerobot-contrast-eval`, `-report`, ...) call each module's `main` directly."""
+
+from __future__ import annotations
+
+import runpy
+import sys
+from importlib.util import find_spec
+
+from lerobot_contrast.contrast.errors import UserError
+
+# The modules each extra installs that its commands import (a user's guess at the extra's name is the key).
+EXTRAS = {
+    "sweep": ("ray",),
+    "train": ("accelerate", "wandb"),
+    "libero": ("libero",),
+    "twin": ("mujoco", "scservo_sdk", "zmq"),
+}
+
+
+def require_extra(extra: str, command: str) -> None:
+    """Raise a UserError naming the extra to install when one of its modules is missing."""
+    absent = [module for module in EXTRAS[extra] if find_spec(module) is None]
+    if absent:
+        raise UserError(
+            f"{command} needs the [{extra}] extra ({', '.join(absent)} not installed): "
+            f"pip install 'lerobot_contrast[{extra}]'"
+        )
+
+
+def _run_module(module: str, extra: str) -> int:
+    """Run `python -m module` once its extra is present; otherwise say which extra to install."""
+    try:
+        require_extra(extra, f"python -m {module}")
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    runpy.run_module(module, run_name="__main__", alter_sys=True)
+    return 0
+
+
+def sweep() -> int:
+    """`lerobot-contrast-sweep`: `python -m lerobot_contrast.sweep`."""
+    return _run_module("lerobot_contrast.sweep", "sweep")
+
+
+def twin() -> int:
+    """`lerobot-contrast-twin`: `python -m lerobot_contrast.twin`."""
+    return _run_module("lerobot_contrast.twin", "twin")
