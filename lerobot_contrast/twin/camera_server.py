@@ -1,0 +1,124 @@
+"""Publishes the twin's webcam frames at the control rate in the wire format of LeRobot's `zmq` camera (one JSON
+string per message: {"timestamps": {name: seconds}, "images": {name: base64 JPEG}}), so its `ZMQCamera` reads them.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import logging
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+import zmq
+
+from lerobot_contrast.contrast.errors import UserError
+
+logger = logging.getLogger(__name__)
+
+JPEG_QUALITY = 80  # what LeRobot's own image_server sends
+
+
+@dataclass
+class FrameTimes:
+    """Seconds spent per published frame, summed: rendering (with the lens), JPEG encoding, sending."""
+
+    frames: int = 0
+    render_s: float = 0.0
+    encode_s: float = 0.0
+    send_s: float = 0.0
+
+
+def encode(name: str, frame: np.ndarray, timestamp: float) -> str:
+    """One message of LeRobot's zmq camera protocol. LeRobot's server JPEG-encodes its RGB frames as they are (as
+    if BGR) and its `ZMQCamera` decodes without converting, so RGB in gives RGB out; do the same."""
+    ok, jpeg = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+    if not ok:
+        raise ValueError(f"cannot JPEG-encode a frame of shape {frame.shape}")
+    return json.dumps({"timestamps": {name: timestamp}, "images": {name: base64.b64encode(jpeg).decode("ascii")}})
+
+
+class CameraServer:
+    """Calls `render()` on its own thread `fps` times a second and publishes each frame on a ZMQ PUB socket;
+    `close()` (if given) runs on that thread when it stops, to free what `render` made there (a GL context)."""
+
+    def __init__(self, render: Callable[[], np.ndarray], name: str = "front", port: int = 5555, fps: float = 30.0,
+                 host: str = "127.0.0.1", close: Callable[[], None] | None = None) -> None:  # fmt: skip
+        if fps <= 0:
+            raise UserError(f"--fps={fps:g}: give a positive frame rate (the control rate, 30 for the SO-101)")
+        self.render, self.name, self.port, self.fps, self.host, self._close = render, name, port, fps, host, close
+        self.times = FrameTimes()
+        self.error: str | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._context: zmq.Context | None = None
+
+    @property
+    def address(self) -> str:
+        return f"tcp://{self.host}:{self.port}"
+
+    def start(self) -> str:
+        """Bind the socket (a port in use is one line saying so) and start publishing; returns the address."""
+        self._context = zmq.Context()
+        socket = self._context.socket(zmq.PUB)
+        socket.setsockopt(zmq.SNDHWM, 20)
+        socket.setsockopt(zmq.LINGER, 0)
+        try:
+            socket.bind(self.address)
+        except zmq.ZMQError as error:
+            socket.close()
+            self._context.term()
+            raise UserError(
+                f"camera port {self.port} on {self.host}: {error.strerror}; choose a free one with --camera_port"
+            ) from None
+        self._thread = threading.Thread(target=self._run, args=(socket,), name=f"twin camera {self.name}", daemon=True)
+        self._thread.start()
+        return self.address
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=10)
+        if self._context is not None:
+            self._context.term()
+            self._context = None
+
+    def _run(self, socket: zmq.Socket) -> None:
+        period = 1.0 / self.fps
+        deadline = time.perf_counter()
+        try:
+            while not self._stop.is_set():
+                self._publish(socket)
+                deadline += period
+                # Behind schedule (a slow frame): start the next one now rather than sending a burst to catch up.
+                deadline = max(deadline, time.perf_counter())
+                self._stop.wait(max(0.0, deadline - time.perf_counter()))
+        except Exception as error:  # a dead camera thread must say why, not leave a silent black feed
+            self.error = f"twin camera {self.name} stopped: {' '.join(str(error).split())[:200]}"
+            print(self.error, file=sys.stderr)
+        finally:
+            socket.close()
+            if self._close is not None:
+                self._close()
+
+    def _publish(self, socket: zmq.Socket) -> None:
+        started = time.perf_counter()
+        frame = self.render()
+        rendered = time.perf_counter()
+        message = encode(self.name, frame, time.time())
+        encoded = time.perf_counter()
+        try:
+            socket.send_string(message, zmq.NOBLOCK)
+        except zmq.Again:
+            logger.debug("camera %s: send queue full, frame dropped", self.name)
+        sent = time.perf_counter()
+        times = self.times
+        times.frames += 1
+        times.render_s += rendered - started
+        times.encode_s += encoded - rendered
+        times.send_s += sent - encoded
