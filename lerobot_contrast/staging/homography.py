@@ -155,7 +155,12 @@ def fit(
     fitted = None
     if lens:
         plain = cv2.findHomography(table, pixels, 0)[0]
-        fitted = fit_lens(table, pixels, size, _focal(plain, (size[0] - 1) / 2, (size[1] - 1) / 2))
+        try:
+            fitted = fit_lens(table, pixels, size, _focal(plain, (size[0] - 1) / 2, (size[1] - 1) / 2))
+        except cv2.error:
+            raise CalibrationError(
+                f"camera {camera}: the markers seen cannot measure the lens; lay the whole board flat in view"
+            ) from None
     homography = cv2.findHomography(table, pixels if fitted is None else fitted.undistort(pixels), 0)[0]
     calibration = CameraCalibration(camera, size, homography, 0.0, markers, fitted)
     error = float(np.sqrt(np.mean(np.sum((calibration.to_pixels(table) - pixels) ** 2, axis=1))))
