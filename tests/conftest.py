@@ -14,7 +14,7 @@ signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 # The test files that start a local Ray: on one worker, so that two Ray clusters never start at once.
-RAY_FILES = {"test_sweep.py", "test_sweep_cluster.py"}
+RAY_FILES = {"test_sweep.py", "test_sweep_cluster.py", "test_sweep_ray_nodes.py"}
 
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook reads the groups
