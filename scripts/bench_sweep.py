@@ -5,7 +5,9 @@ Usage: python scripts/bench_sweep.py [--cells 8] [--n_instances 60] [--max_episo
 The last line is `cells=... wall_1worker_s=... wall_2workers_s=... speedup=... overhead_per_cell_s=...`: speedup is
 1 worker's wall time over 2 workers', and the overhead per cell is the 1-worker sweep's wall time less the
 sequential one, per cell. The line before gives Ray's startup (not in the overhead) and inside_cells_1worker_s, the
-time the 1-worker sweep's cells took in their worker (the first cell there pays the worker's imports). Goals on an
+time the 1-worker sweep's cells took in their worker (the first cell there pays the worker's imports); the line
+before that what a cluster adds: carry_ms_per_cell, packing a cell's run directory on a node without the sweep
+folder and unpacking it into the folder, and shipped_mb, this project's code as the nodes receive it. Goals on an
 idle 2-core machine: speedup at least 1.7, overhead under 2 s per cell. Other load on the cores lowers the speedup.
 The default cells take about 10 s each, a small evaluation; with much shorter cells each worker's one-time imports
 (torch, LeRobot) weigh more and the speedup reads lower (4 cells of 16 instances: 1.37). About 3 minutes in all.
@@ -24,8 +26,10 @@ import yaml
 from rich.console import Console
 
 from lerobot_contrast.build import register_robots
+from lerobot_contrast.sweep.carry import pack, unpack
 from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
 from lerobot_contrast.sweep.command import SweepConfig, execute
+from lerobot_contrast.sweep.shipping import shipped_paths
 from lerobot_contrast.sweep.worker import run_cell
 
 
@@ -69,6 +73,20 @@ def on_ray(path: Path, out: Path, workers: int) -> tuple[float, float, float]:
     return started - start, time.perf_counter() - started, sum(o.seconds for o in outcomes.values())
 
 
+def carried(out: Path) -> float:
+    """Milliseconds per cell to pack its run directory and unpack it elsewhere, as a cell comes back from a node."""
+    dirs = [d for d in out.iterdir() if (d / "journal.jsonl").is_file()]
+    start = time.perf_counter()
+    for run_dir in dirs:
+        unpack(pack(run_dir), out.with_name("carried") / run_dir.name)
+    return (time.perf_counter() - start) * 1000 / len(dirs)
+
+
+def shipped_mb() -> float:
+    files = [f for p in shipped_paths() for f in p.rglob("*") if f.is_file() and "__pycache__" not in f.parts]
+    return sum(f.stat().st_size for f in files if f.suffix != ".pyc") / 1e6
+
+
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     register_robots()  # imports shared by every run below, paid once before timing
@@ -78,6 +96,8 @@ def main(argv: list[str] | None = None) -> None:
         seq = sequential(path, Path(tmp) / "sequential")
         start_1, wall_1, inside_1 = on_ray(path, Path(tmp) / "one", 1)
         start_2, wall_2, _ = on_ray(path, Path(tmp) / "two", 2)
+        carry_ms = carried(Path(tmp) / "one")
+    print(f"carry_ms_per_cell={carry_ms:.1f} shipped_mb={shipped_mb():.2f}")
     print(
         f"sequential_s={seq:.1f} inside_cells_1worker_s={inside_1:.1f} ray_start_1worker_s={start_1:.1f} "
         f"ray_start_2workers_s={start_2:.1f}"

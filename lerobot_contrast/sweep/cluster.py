@@ -21,6 +21,8 @@ TOKEN_PLACES = (
     "Ray reads it from RAY_AUTH_TOKEN, else the file RAY_AUTH_TOKEN_PATH names, else ~/.ray/auth_token: "
     "copy the head's token there (`ray get-auth-token` on the head prints it)"
 )
+# Ray before 2.52 has no token authentication, so nothing to catch.
+AUTH_ERROR = getattr(ray.exceptions, "AuthenticationError", ())
 # Ray's notes on every start that token authentication is on (or off): noise to a sweep, whose own lines say
 # what went wrong with a token.
 NOISY = ("ray._private.authentication.authentication_token_setup",)
@@ -46,7 +48,7 @@ def join(args: RayArgs) -> None:
     try:
         target = args.address if args.address.startswith("ray://") else address
         ray.init(address=target, runtime_env=runtime_env(), **quiet)
-    except ray.exceptions.AuthenticationError:
+    except AUTH_ERROR:
         raise ClusterError(
             f"--ray.address={args.address}: the cluster refused this machine's token; {TOKEN_PLACES}"
         ) from None
@@ -94,7 +96,7 @@ def head_address(given: str) -> str:
 
 def use_token_if_any() -> None:
     """Send the token where one is found (the Ray Client sends none unless RAY_AUTH_MODE=token is set)."""
-    if os.environ.get("RAY_AUTH_MODE"):
+    if os.environ.get("RAY_AUTH_MODE") or not AUTH_ERROR:
         return
     from ray._private.authentication.authentication_token_setup import maybe_enable_token_auth_if_token_available
 

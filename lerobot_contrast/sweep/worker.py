@@ -97,7 +97,7 @@ def _check_policy_path(cfg: EvalConfig) -> None:
     path = cfg.policy.path
     if path and not Path(path).exists() and not HUB_ID.fullmatch(str(path)):
         raise UserError(
-            f"policy.path {path} is not on node {_node_ip()}: a checkpoint folder must be at that path on every node "
+            f"policy.path {path} is not on {_where()}: a checkpoint folder must be at that path on every node "
             "(storage they all mount there), or on the Hub (give its repo id)"
         )
 
@@ -156,10 +156,10 @@ def _node() -> str | None:
     return ray.get_runtime_context().get_node_id() if ray.is_initialized() else None
 
 
-def _node_ip() -> str:
+def _where() -> str:
     import ray
 
-    return ray.util.get_node_ip_address() if ray.is_initialized() else "this machine"
+    return f"node {ray.util.get_node_ip_address()}" if ray.is_initialized() else "this machine"
 
 
 def _gpus() -> float:
