@@ -31,6 +31,10 @@ class CameraArgs:
     distance: float = 0.85
     # Focal length as a fraction of the image width (1.0: 640 px at 640x480; smaller sees more).
     focal: float = 1.0
+    # Draw meshes in full detail; by default a mesh that has a convex hull (the arm's links) is drawn as its hull,
+    # which MuJoCo computes for contacts anyway: the SO-101's CAD meshes hold 320k triangles, a CPU renderer's
+    # whole frame budget.
+    full_meshes: bool = False
 
     def check(self) -> None:
         if self.width < 16 or self.height < 16:
@@ -61,6 +65,7 @@ class TwinCamera:
         self.translation = -self.rotation @ self.position
         self._renderer = None
         self._model = None
+        self._hulls: set[int] = set()
 
     @property
     def intrinsics(self) -> np.ndarray:
@@ -100,10 +105,21 @@ class TwinCamera:
         if model is not self._model:
             self._open(model)
         self._renderer.update_scene(data, self._camera)
+        if not self.args.full_meshes:
+            self._draw_hulls()
 
     def develop(self) -> np.ndarray:
         """Draw the captured scene and pass it through the lens: RGB, uint8, the frame's size."""
         return self.lens.apply(self._renderer.render())
+
+    def _draw_hulls(self) -> None:
+        import mujoco
+
+        scene = self._renderer.scene
+        for index in range(scene.ngeom):
+            geom = scene.geoms[index]
+            if geom.type == mujoco.mjtGeom.mjGEOM_MESH and geom.dataid // 2 in self._hulls:
+                geom.dataid = geom.dataid // 2 * 2 + 1  # a scene's mesh id is 2 * mesh, or 2 * mesh + 1: its hull
 
     def close(self) -> None:
         if self._renderer is not None:
@@ -137,4 +153,5 @@ class TwinCamera:
         self._camera.distance = self.args.distance
         self._camera.azimuth = self.args.azimuth_deg + 180  # MuJoCo's azimuth is where the camera looks, not stands
         self._camera.elevation = -self.args.elevation_deg
+        self._hulls = {mesh for mesh in range(model.nmesh) if model.mesh_graphadr[mesh] >= 0}
         self._model = model

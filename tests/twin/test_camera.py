@@ -111,6 +111,33 @@ def test_the_board_is_found_under_the_default_lens_where_the_camera_model_says(w
     assert json.loads(output.read_text())["cameras"]["front"]["markers"] == board.COLUMNS * board.ROWS
 
 
+@pytest.mark.parametrize(("full_meshes", "hole_shows"), [(True, "table"), (False, "ring")])
+def test_meshes_with_a_hull_are_drawn_as_their_hull_unless_asked_for_in_full(full_meshes, hole_shows):
+    """The arm's links are drawn as the convex hulls MuJoCo computes for contacts (a CPU renderer cannot draw the
+    SO-101's 320k CAD triangles 30 times a second): a blue ring's hole is filled by its hull, open in full."""
+    import mujoco
+
+    spec = table(with_board=False)
+    ring = spec.add_mesh(name="ring")
+    ring.make_supertorus(24, 0.3, 1.0, 1.0)
+    ring.scale = [0.2, 0.2, 0.2]
+    body = spec.worldbody.add_body(pos=[0.3, 0.0, 0.03])
+    for group, collides in ((2, 0), (3, 1)):  # as the SO-101 model has them: a visual geom and a collision twin
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="ring", group=group, contype=collides,
+                      conaffinity=collides, rgba=[0.1, 0.2, 0.9, 1])  # fmt: skip
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    camera = TwinCamera(TARGET, CameraArgs(full_meshes=full_meshes), LensArgs(noise=0.0))
+    try:
+        frame = camera.frame(model, data)
+    finally:
+        camera.close()
+    col, row = np.round(camera.project(np.array([[0.3, 0.0, 0.03]]))[0]).astype(int)
+    red, _, blue = frame[row - 1 : row + 2, col - 1 : col + 2].reshape(-1, 3).mean(axis=0)
+    assert ("ring" if blue > 2 * red else "table") == hole_shows
+
+
 def test_the_board_moves_and_comes_off_the_table():
     import mujoco
 
