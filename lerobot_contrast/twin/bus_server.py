@@ -97,19 +97,23 @@ class BusServer:
             if wake in ready:
                 return
             buffer += os.read(master, 4096)
-            for servo_id, instruction, params in take_packets(buffer):
-                reply = self.answer(servo_id, instruction, params)
+            packets = take_packets(buffer)
+            for k, (servo_id, instruction, params) in enumerate(packets):
+                # The driver sends its next packet only once it has the reply or has given up waiting, so a packet
+                # with another behind it was given up on: its late reply would be read as the next one's answer.
+                reply = self.answer(servo_id, instruction, params, reply=k == len(packets) - 1 and not buffer)
                 if reply:
                     os.write(master, reply)
 
-    def answer(self, servo_id: int, instruction: int, params: bytes) -> bytes:
-        """The bytes the bus sends back for one instruction packet (status packets, after faults)."""
+    def answer(self, servo_id: int, instruction: int, params: bytes, reply: bool = True) -> bytes:
+        """The bytes the bus sends back for one instruction packet (status packets, after faults); with `reply`
+        False the servos act on it but stay silent."""
         if self.clocked:
             now = time.monotonic()
             self.bank.step(now - self._last_step)
             self._last_step = now
         packets = self._status_packets(servo_id, instruction, params)
-        if not packets:
+        if not packets or not reply:
             return b""
         moving = any(self.bank.memory(i).read("Moving") for i in self.bank.ids)
         return b"".join(self.faults.apply(packet, moving) for packet in packets)
