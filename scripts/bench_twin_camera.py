@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import threading
 import time
 from functools import partial
 
 # The twin's camera first: it chooses MuJoCo's EGL backend before anything imports MuJoCo.
 from lerobot_contrast.twin.camera import CameraArgs, TwinCamera  # isort: skip
-from lerobot_contrast.twin.camera_server import CameraServer, encode
+from lerobot_contrast.twin.camera_server import encode, serve_camera
 from lerobot_contrast.twin.lens import LensArgs
 
 
@@ -59,9 +60,13 @@ def received_fps(model, data, target, port: int, seconds: float) -> tuple[float,
     """Frames per second LeRobot's ZMQCamera receives from the server at 30 Hz, and the server's publish ms."""
     from lerobot.cameras.zmq import ZMQCamera, ZMQCameraConfig
 
-    camera = TwinCamera(target, CameraArgs(), LensArgs())
-    server = CameraServer(lambda: camera.frame(model, data), port=port, fps=30, close=camera.close)
-    server.start()
+    lock = threading.Lock()
+
+    def read(view):
+        with lock:
+            return view(model, data)
+
+    server = serve_camera(read, target, CameraArgs(), LensArgs(), port=port, fps=30)
     reader = ZMQCamera(ZMQCameraConfig(server_address="127.0.0.1", port=port, camera_name="front"))
     try:
         reader.connect()

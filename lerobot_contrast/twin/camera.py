@@ -8,6 +8,7 @@ import math
 import os
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
@@ -80,8 +81,6 @@ class TwinCamera:
     def project(self, points: np.ndarray) -> np.ndarray:
         """World points (N, 3), metres -> their pixels (N, 2) in the frame, as OpenCV's model with the true
         intrinsics, pose and lens gives them; NaN where a point is behind the camera or outside the rendered view."""
-        import cv2
-
         points = np.asarray(points, np.float64).reshape(-1, 3)
         camera = points @ self.rotation.T + self.translation
         rvec, _ = cv2.Rodrigues(self.rotation)

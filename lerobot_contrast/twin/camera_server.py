@@ -18,6 +18,8 @@ import numpy as np
 import zmq
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.twin.camera import CameraArgs, TwinCamera
+from lerobot_contrast.twin.lens import LensArgs
 
 logger = logging.getLogger(__name__)
 
@@ -122,3 +124,24 @@ class CameraServer:
         times.render_s += rendered - started
         times.encode_s += encoded - rendered
         times.send_s += sent - encoded
+
+
+def serve_camera(read: Callable[[Callable], object], target: tuple[float, float, float], args: CameraArgs,
+                 lens: LensArgs, name: str = "front", port: int = 5555, fps: float = 30.0) -> CameraServer:  # fmt: skip
+    """Start publishing the twin's webcam. `read(view)` calls `view(model, data)` while the physics holds still
+    (`Physics.read`): only the scene's copy happens then, the drawing and the lens after."""
+    camera = TwinCamera(target, args, lens)
+
+    def render() -> np.ndarray:
+        read(camera.capture)
+        return camera.develop()
+
+    server = CameraServer(render, name=name, port=port, fps=fps, close=camera.close)
+    server.start()
+    return server
+
+
+def robot_cameras(server: CameraServer, args: CameraArgs) -> str:
+    """The value of eval's --robot.cameras that makes LeRobot's `ZMQCamera` read `server`."""
+    return (f"{{{server.name}: {{type: zmq, server_address: {server.host}, port: {server.port}, camera_name: "
+            f"{server.name}, width: {args.width}, height: {args.height}, fps: {round(server.fps)}}}}}")  # fmt: skip

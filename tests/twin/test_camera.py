@@ -14,7 +14,7 @@ import zmq
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.twin.board import NAME, add_board, remove_board
 from lerobot_contrast.twin.camera import CameraArgs, TwinCamera
-from lerobot_contrast.twin.camera_server import CameraServer
+from lerobot_contrast.twin.camera_server import CameraServer, robot_cameras, serve_camera
 from lerobot_contrast.twin.lens import LensArgs
 
 TARGET = (0.30, 0.0, 0.0)  # so101_blocks' workspace centre
@@ -52,18 +52,26 @@ def free_port() -> int:
 
 
 def test_lerobot_zmq_camera_reads_rgb_frames_from_the_twin(world):
-    from lerobot.cameras.zmq import ZMQCamera, ZMQCameraConfig
+    """The --robot.cameras flag the twin prints, parsed as eval parses it, gives LeRobot's own ZMQCamera, which reads
+    the twin's frames."""
+    import draccus
+    import lerobot.cameras.zmq  # noqa: F401  (registers the zmq camera type, as eval's robot registry does)
+    from lerobot.cameras.utils import make_cameras_from_configs
+    from lerobot.robots.so_follower import SO101FollowerConfig
 
     model, data = world
-    camera = TwinCamera(TARGET, CameraArgs(), LensArgs())
-    closed_on = []
-    server = CameraServer(lambda: camera.frame(model, data), name="front", port=free_port(), fps=30,
-                          close=lambda: closed_on.append(threading.current_thread().name))  # fmt: skip
-    server.start()
+    lock = threading.Lock()
+
+    def read(view):
+        with lock:
+            return view(model, data)
+
+    args = CameraArgs()
+    server = serve_camera(read, TARGET, args, LensArgs(), name="front", port=free_port(), fps=30)
     try:
-        config = ZMQCameraConfig(server_address="127.0.0.1", port=server.port, camera_name="front", width=640,
-                                 height=480, fps=30)  # fmt: skip
-        reader = ZMQCamera(config)
+        flag = robot_cameras(server, args)
+        config = draccus.parse(SO101FollowerConfig, args=["--port=/dev/null", f"--cameras={flag}"])
+        reader = make_cameras_from_configs(config.cameras)["front"]
         reader.connect()
         try:
             frames = [reader.read() for _ in range(3)]
@@ -73,10 +81,10 @@ def test_lerobot_zmq_camera_reads_rgb_frames_from_the_twin(world):
         server.stop()
     assert all(frame.shape == (480, 640, 3) and frame.dtype == np.uint8 for frame in frames)
     assert not np.array_equal(frames[0], frames[1])  # fresh frames, each with its own sensor noise
+    camera = TwinCamera(TARGET, args, LensArgs())  # the same pose: where the cube's top shows
     col, row = np.round(camera.project(np.array([RED_CUBE[:2] + (0.025,)]))[0]).astype(int)
     red, green, blue = frames[-1][row - 2 : row + 3, col - 2 : col + 3].reshape(-1, 3).mean(axis=0)
     assert red > 2 * green and red > 2 * blue  # the red cube arrives red in RGB order
-    assert closed_on == ["twin camera front"]  # the GL context was freed on the thread that made it
     assert server.times.frames >= 3 and server.error is None
 
 
@@ -169,13 +177,15 @@ def test_a_renderer_that_fails_stops_the_feed_with_one_line(capsys):
     def broken() -> np.ndarray:
         raise RuntimeError("the GL context was lost")
 
-    closed = threading.Event()
-    server = CameraServer(broken, name="front", port=free_port(), close=closed.set)
+    closed_on = []
+    server = CameraServer(broken, name="front", port=free_port(),
+                          close=lambda: closed_on.append(threading.current_thread().name))  # fmt: skip
     server.start()
     server._thread.join(timeout=5)
     server.stop()
     assert server.error == "twin camera front stopped: the GL context was lost"
-    assert capsys.readouterr().err.strip() == server.error and closed.is_set()
+    assert capsys.readouterr().err.strip() == server.error
+    assert closed_on == ["twin camera front"]  # what render made (a GL context) is freed on the thread that made it
 
 
 @pytest.mark.parametrize(("args", "says"), [(CameraArgs(elevation_deg=5), "camera elevation 5 degrees: give 10 to 85"),
