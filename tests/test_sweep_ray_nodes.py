@@ -1,7 +1,7 @@
 """A sweep on a Ray cluster as a lab starts one: a head and a second node, each a `ray start` process on loopback with
-Ray's default token authentication. The second node runs from an environment without this project (its code comes
-through Ray) and cannot see the driver's sweep folder (hidden by a mount namespace), so its cells come back through
-Ray; a wrong address or token is one line; a sweep interrupted mid-way resumes."""
+Ray's default token authentication, both from an environment without this project (its code comes through Ray).
+The second node, where the cells run, cannot see the driver's sweep folder (hidden by a mount namespace), so its cells
+come back through Ray; a wrong address or token is one line; a sweep interrupted mid-way resumes."""
 
 import json
 import os
@@ -29,7 +29,6 @@ pytestmark = pytest.mark.slow
 ORACLE = {"max_episode_steps": 30, "rerun": False, "policy": {"type": "oracle"}}
 TINY = {"eval": {"n_instances": 2, **ORACLE}, "grid": {"seed": [0, 1]}}
 THREE = {"eval": {"n_instances": 2, **ORACLE}, "grid": {"seed": [0, 1, 2]}}
-RAY = [sys.executable, "-m", "ray.scripts.scripts"]
 OURS = tuple(name.replace("-", "_") for name in DISTRIBUTIONS)
 
 
@@ -86,9 +85,11 @@ def cluster():
     driver_env = {**base, "HOME": str(root / "home")}
     ports = ["--node-ip-address=127.0.0.1", "--disable-usage-stats", f"--dashboard-agent-listen-port={free_port()}"]
     try:
-        head = [*RAY, "start", "--head", f"--port={gcs}", f"--ray-client-server-port={client}", "--num-cpus=0"]
-        subprocess.run([*head, "--include-dashboard=false", *ports], env=driver_env, check=True, capture_output=True)
         python = worker_venv(root)
+        # Neither node has this project: the head's Ray Client server, too, takes the driver's code from Ray.
+        head = [python, "-m", "ray.scripts.scripts", "start", "--head", f"--port={gcs}", "--num-cpus=0"]
+        head += [f"--ray-client-server-port={client}", "--include-dashboard=false", *ports]
+        subprocess.run(head, env=driver_env, cwd=root / "wlocal", check=True, capture_output=True)
         node = f"{python} -m ray.scripts.scripts start --address=127.0.0.1:{gcs} --num-cpus=1 {' '.join(ports)}"
         hide = f"mount -t tmpfs none {root / 'driver'} && cd {root / 'wlocal'} && exec {node}"
         worker_env = {**base, "HOME": str(root / "whome"), "TMPDIR": str(root / "wtmp"), "RAY_AUTH_MODE": "token"}
