@@ -1,5 +1,6 @@
-"""Run directories carried between a node's own disk and the sweep folder (no Ray needed): what comes back, what a node
-resumes from, how a node tells it shares the sweep folder, and a policy folder a node does not have."""
+"""What travels between the driver and a cluster's nodes (no Ray needed): run directories between a node's own disk and
+the sweep folder (what comes back, what a node resumes from, how a node tells it shares the folder), this project's
+code, and a policy folder a node does not have."""
 
 import tempfile
 from pathlib import Path
@@ -8,6 +9,7 @@ import pytest
 
 from lerobot_contrast.config import EvalConfig
 from lerobot_contrast.sweep.carry import Carry, journal_lines, local_run_dir, mark_folder, pack, unpack
+from lerobot_contrast.sweep.shipping import shipped_paths
 from lerobot_contrast.sweep.worker import run_cell
 
 FILES = ("config.json", "plan.json", "journal.jsonl", "results.parquet", "summary.json")
@@ -80,3 +82,16 @@ def test_a_policy_folder_missing_on_the_node_fails_its_cell_in_one_line(tmp_path
         f"policy.path {path} is not on this machine: a checkpoint folder must be at that path on every node "
         "(storage they all mount there), or on the Hub (give its repo id)"
     )
+
+
+def test_the_code_a_cluster_receives_is_each_project_package_with_its_metadata():
+    paths = shipped_paths()
+    packages = {p.name for p in paths if not p.name.endswith(".dist-info")}
+    assert {"lerobot_contrast", "lerobot_policy_tabletop_pointer", "lerobot_robot_locobot"} <= packages
+    for package in packages:  # its metadata beside it: entry points and LeRobot's plugin discovery on the node
+        (metadata,) = [p for p in paths if p.name.startswith(f"{package}-") and p.name.endswith(".dist-info")]
+        assert (metadata / "METADATA").is_file()
+    contrast = next(p for p in paths if p.name == "lerobot_contrast")
+    assert (contrast / "sweep" / "worker.py").is_file()
+    metadata = next(p for p in paths if p.name.startswith("lerobot_contrast-"))
+    assert "lerobot_contrast.tasks" in (metadata / "entry_points.txt").read_text()

@@ -29,16 +29,19 @@ def shipped_paths() -> list[Path]:
     path, so `import` finds the package and importlib.metadata its entry points, as in this environment."""
     paths = []
     for name in DISTRIBUTIONS:
-        try:
-            dist = importlib.metadata.distribution(name)
-        except importlib.metadata.PackageNotFoundError:
-            continue  # not installed here, so no cell of this machine's sweeps uses it
         spec = importlib.util.find_spec(name.replace("-", "_"))
-        if spec is None or not spec.submodule_search_locations:
-            continue
-        paths.append(Path(next(iter(spec.submodule_search_locations))))
-        paths += [Path(str(dist.locate_file(f))).parent for f in dist.files or () if f.name == "METADATA"][:1]
+        metadata = _metadata_folder(name)
+        if spec is None or not spec.submodule_search_locations or metadata is None:
+            continue  # not installed here, so no cell of this machine's sweeps uses it
+        paths += [Path(next(iter(spec.submodule_search_locations))), metadata]
     return paths
+
+
+def _metadata_folder(name: str) -> Path | None:
+    """The installed distribution's `*.dist-info`, before an `*.egg-info` a build left in a checkout (found first
+    when the sweep starts there, and possibly stale)."""
+    found = [Path(dist._path) for dist in importlib.metadata.distributions(name=name) if hasattr(dist, "_path")]
+    return next((path for path in found if path.suffix == ".dist-info"), found[0] if found else None)
 
 
 def runtime_env() -> dict[str, Any]:
