@@ -57,8 +57,8 @@ def join(args: RayArgs) -> None:
 
 
 def reach(given: str) -> str:
-    """The head's HOST:PORT, checked to answer and, through Ray Client, to take this machine's token (which is
-    sent wherever one is found): each failure one line, in seconds."""
+    """The head's HOST:PORT (its client port for ray://), checked to answer and to take this machine's token (sent
+    wherever one is found): each failure one line, in seconds."""
     _quiet()
     address = head_address(given)
     use_token_if_any()
