@@ -1,0 +1,233 @@
+"""The scripted operator of the twin: runs `python -m lerobot_contrast.eval ... --operator=console` as a child, reads
+what the console says to move where, places each object through the twin's placement socket (with a chosen error),
+presses Enter, and labels each trial from the twin's true scene with the task's own goal check.
+
+    python -m lerobot_contrast.twin.operator [--placement=tcp://127.0.0.1:5556] [--placement_error=normal:0.005]
+        [--seed=0] [--on_flagged=accept|fix] EVAL_FLAGS...
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import zmq
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.scene import Pose, Scene
+
+DEFAULT_PLACEMENT = "tcp://127.0.0.1:5556"
+REPLY_TIMEOUT_MS = 5000
+WHERE = r"\((?:off the workspace|[+-]\d+\.\d+, [+-]\d+\.\d+)\)"
+TRIAL = re.compile(r"trial (\d+)/(\d+) · ")
+MOVE = re.compile(rf"^\W*(\w+)\s*[│|]\s*({WHERE})\s*[│|]\s*({WHERE})\s*[│|]")
+OFF = re.compile(r"^\W*(\w+)\s*[│|]\s*(?:not seen|\d+\.\d+ cm off)")
+STAGED_PROMPT, CHECK_PROMPT = "Enter when staged", "Enter after fixing them"
+OUTCOME_PROMPT, ABORTED_PROMPT = "outcome? ", "Enter to continue with the next trial"
+
+
+class OperatorError(Exception):
+    """Something the scripted operator cannot do; its message is one line."""
+
+
+@dataclass(frozen=True)
+class PlacementError:
+    """How far from its target an object lands: none, normal:SIGMA (metres per axis) or offset:D (exactly D metres
+    in a random direction)."""
+
+    kind: str = "none"
+    size: float = 0.0
+
+    @classmethod
+    def parse(cls, text: str) -> PlacementError:
+        kind, _, size = text.partition(":")
+        try:
+            error = cls(kind, float(size) if size else 0.0)
+        except ValueError:
+            error = cls("?", -1.0)
+        if error.kind not in ("none", "normal", "offset") or error.size < 0 or (error.kind != "none") != bool(size):
+            raise OperatorError(f"--placement_error={text}: give none, normal:SIGMA or offset:D (metres)")
+        return error
+
+    def draw(self, rng: np.random.Generator) -> tuple[float, float]:
+        if self.kind == "normal":
+            return tuple(rng.normal(0.0, self.size, 2))
+        if self.kind == "offset":
+            angle = rng.uniform(0, 2 * np.pi)
+            return self.size * np.cos(angle), self.size * np.sin(angle)
+        return 0.0, 0.0
+
+
+class Placement:
+    """A client of the twin's placement socket (twin/placement.py)."""
+
+    def __init__(self, address: str):
+        self.address = address
+        self._context = zmq.Context.instance()
+        self._socket = self._connect()
+
+    def _connect(self) -> zmq.Socket:
+        socket = self._context.socket(zmq.REQ)
+        socket.setsockopt(zmq.LINGER, 0)
+        socket.setsockopt(zmq.RCVTIMEO, REPLY_TIMEOUT_MS)
+        socket.connect(self.address)
+        return socket
+
+    def ask(self, request: dict) -> dict:
+        self._socket.send_string(json.dumps(request))
+        try:
+            reply = json.loads(self._socket.recv())
+        except zmq.Again:
+            self._socket.close()
+            self._socket = self._connect()  # a REQ socket that missed its reply cannot send again
+            raise OperatorError(
+                f"the twin's placement socket {self.address} did not answer; is the twin running?"
+            ) from None
+        if not reply.get("ok"):
+            raise OperatorError(f"the twin refused {request}: {reply.get('error')}")
+        return reply
+
+    def place(self, name: str, x: float, y: float) -> None:
+        self.ask({"cmd": "place", "object": name, "x": float(x), "y": float(y)})
+
+    def scene(self) -> Scene:
+        objects = self.ask({"cmd": "scene"})["objects"]
+        return Scene({name: Pose(*pose) for name, pose in objects.items()})
+
+
+def _pose(text: str) -> tuple[float, float] | None:
+    numbers = re.findall(r"[+-]\d+\.\d+", text)
+    return (float(numbers[0]), float(numbers[1])) if numbers else None
+
+
+class Plan:
+    """The run's trials as the evaluator plans them, to know each trial's goal (read from the same flags)."""
+
+    def __init__(self, eval_argv: Sequence[str]):
+        from lerobot_contrast.build import check_robot_type, register_robots
+        from lerobot_contrast.config import EvalConfig, resume_args
+        from lerobot_contrast.evaluation import preview
+        from lerobot_contrast.flags import bool_flags, join_values, parse_config
+        from lerobot_contrast.run_setup import planned_evaluation
+        from lerobot_contrast.twin.scene import start_poses
+
+        argv = join_values(list(eval_argv), bool_flags(EvalConfig))
+        check_robot_type(argv, register_robots())
+        planned = planned_evaluation(parse_config(EvalConfig, resume_args(argv)))
+        self.task = planned.task
+        self.instances = {r.index: r.instance for r in preview(planned) if r.instance is not None}
+        self.parking = start_poses(self.task.spec, None)  # where the twin keeps objects off the workspace
+
+    def judge(self, index: int, instruction: str, scene: Scene) -> bool:
+        instance = self.instances.get(index)
+        if instance is None or instance.instruction != instruction:
+            raise OperatorError(
+                f"trial {index + 1} says {instruction!r}, which the plan does not: run the operator with the same "
+                "eval flags"
+            )
+        return self.task.is_achieved(instance, scene)
+
+
+class Operator:
+    """Answers one eval's console: `answer` writes a line to its input, as a person pressing keys does."""
+
+    def __init__(self, plan: Plan, placement: Placement, error: PlacementError, seed: int, on_flagged: str):
+        self.plan, self.placement, self.error, self.on_flagged = plan, placement, error, on_flagged
+        self.rng = np.random.default_rng(seed)
+        self.index, self.instruction = 0, ""
+        self.moves: dict[str, tuple[float, float] | None] = {}  # object -> target (None: off the workspace)
+        self.flagged: list[str] = []
+        self.fixes = 0
+        self.placed: list[dict] = []  # every placement made: object, target, where it was put
+
+    def read(self, line: str) -> str | None:
+        """Take one line of the console's output; returns what to type (a line) when it is a prompt."""
+        if found := TRIAL.search(line):
+            self.index, self.moves, self.fixes = int(found.group(1)) - 1, {}, 0
+        elif line.startswith("instruction: "):
+            self.instruction = line.removeprefix("instruction: ").strip()
+        elif found := MOVE.match(line):
+            self.moves[found.group(1)] = _pose(found.group(3))
+            self.flagged = []
+        elif found := OFF.match(line):
+            self.flagged.append(found.group(1))
+        elif STAGED_PROMPT in line:
+            self._place(self.moves)
+            return ""
+        elif CHECK_PROMPT in line:
+            if self.on_flagged == "fix" and self.fixes < 2:
+                self.fixes += 1
+                self._place({name: self.moves.get(name) for name in self.flagged if name in self.moves})
+                self.flagged = []
+                return ""
+            self.flagged = []
+            return "a"
+        elif OUTCOME_PROMPT in line:
+            return "y" if self.plan.judge(self.index, self.instruction, self.placement.scene()) else "n"
+        elif ABORTED_PROMPT in line:
+            return ""
+        return None
+
+    def _place(self, targets: dict[str, tuple[float, float] | None]) -> None:
+        for name, target in targets.items():
+            if target is None:  # off the workspace: where the twin parks it
+                parked = self.plan.parking[name]
+                self.placement.place(name, parked.x, parked.y)
+                continue
+            dx, dy = self.error.draw(self.rng)
+            self.placement.place(name, target[0] + dx, target[1] + dy)
+            self.placed.append({"trial": self.index, "object": name, "target": target, "offset": [dx, dy]})
+
+
+def run_eval(eval_argv: Sequence[str], operator: Operator) -> int:
+    """Run the eval with the console answered by `operator`, echoing what it prints; returns its exit code."""
+    # Wide lines keep the console's tables on one line each; unbuffered output shows each prompt when printed.
+    env = {**os.environ, "COLUMNS": "200", "PYTHONUNBUFFERED": "1"}
+    command = [sys.executable, "-m", "lerobot_contrast.eval", *eval_argv, "--operator=console"]
+    with subprocess.Popen(
+        command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
+    ) as child:
+        try:
+            for line in child.stdout:
+                print(line, end="", flush=True)
+                typed = operator.read(line.rstrip("\n"))
+                if typed is not None:
+                    print(f"[operator] {typed or 'Enter'}", flush=True)
+                    child.stdin.write(typed + "\n")
+                    child.stdin.flush()
+        except OperatorError:
+            child.stdin.write("q\n")  # stop the session where it is: the run stays resumable
+            child.stdin.close()
+            child.wait()
+            raise
+        except (BrokenPipeError, KeyboardInterrupt):
+            pass
+        return child.wait()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m lerobot_contrast.twin.operator", description=__doc__)
+    parser.add_argument("--placement", default=DEFAULT_PLACEMENT, help="the twin's placement socket")
+    parser.add_argument("--placement_error", default="none", help="none, normal:SIGMA or offset:D (metres)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the placement errors")
+    parser.add_argument("--on_flagged", choices=("accept", "fix"), default="accept",
+                        help="when the camera flags an object: accept it as placed, or place it again (twice at most)")  # fmt: skip
+    known, eval_argv = parser.parse_known_args(argv)
+    try:
+        error = PlacementError.parse(known.placement_error)
+        operator = Operator(Plan(eval_argv), Placement(known.placement), error, known.seed, known.on_flagged)
+        return run_eval(eval_argv, operator)
+    except (OperatorError, UserError) as failure:
+        print(f"error: {failure}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
