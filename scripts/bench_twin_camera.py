@@ -1,5 +1,6 @@
 """The twin's webcam on this CPU: per frame, the MuJoCo render of the so101_blocks scene (arm, table, cubes, bins, the
-board), the lens, JPEG and publishing; then what LeRobot's `ZMQCamera` receives while the server runs at 30 Hz.
+board; the arm drawn as its view hulls), the lens, JPEG and publishing; then what LeRobot's `ZMQCamera` receives
+while the server runs at 30 Hz.
 Figures last: render_ms= lens_ms= jpeg_ms= publish_ms= frame_ms= max_fps= cpu_ms= received_fps=
 (medians of wall time; cpu_ms is the CPU time one frame costs, the renderer's worker threads included: on a busy
 machine wall times grow, CPU time much less.)
@@ -16,7 +17,7 @@ import time
 from functools import partial
 
 # The twin's camera first: it chooses MuJoCo's EGL backend before anything imports MuJoCo.
-from lerobot_contrast.twin.camera import CameraArgs, TwinCamera  # isort: skip
+from lerobot_contrast.twin.camera import CameraArgs, TwinCamera, view_hulls  # isort: skip
 from lerobot_contrast.twin.camera_server import encode, serve_camera
 from lerobot_contrast.twin.lens import LensArgs
 
@@ -29,7 +30,7 @@ def world():
     from lerobot_contrast.twin.scene import build_spec
 
     task = load_task_file("so101_blocks").spec
-    model = build_spec(task, extras=[partial(add_board, x=0.30, y=0.0, yaw_deg=10.0)]).compile()
+    model = build_spec(task, extras=[view_hulls, partial(add_board, x=0.30, y=0.0, yaw_deg=10.0)]).compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     return task, model, data

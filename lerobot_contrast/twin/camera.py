@@ -16,6 +16,7 @@ from lerobot_contrast.twin.lens import Lens, LensArgs
 
 # Offscreen rendering without a display; Mesa's EGL renders on the CPU where there is no GPU.
 os.environ.setdefault("MUJOCO_GL", "egl")
+VIEW_HULL_VERTICES = 128  # the arm's links stay recognisable; their CAD meshes hold 320k triangles
 
 
 @dataclass(frozen=True)
@@ -32,9 +33,8 @@ class CameraArgs:
     distance: float = 0.85
     # Focal length as a fraction of the image width (1.0: 640 px at 640x480; smaller sees more).
     focal: float = 1.0
-    # Draw meshes in full detail; by default a mesh that has a convex hull (the arm's links) is drawn as its hull,
-    # which MuJoCo computes for contacts anyway: the SO-101's CAD meshes hold 320k triangles, a CPU renderer's
-    # whole frame budget.
+    # Draw meshes in full detail; by default a mesh that has a convex hull is drawn as its hull (see `view_hulls`):
+    # the SO-101's CAD meshes cost a CPU renderer 20 ms a frame, their hulls 6.
     full_meshes: bool = False
 
     def check(self) -> None:
@@ -44,6 +44,26 @@ class CameraArgs:
             raise UserError(f"camera elevation {self.elevation_deg:g} degrees: give 10 to 85 (a bench webcam: 40-60)")
         if self.distance <= 0 or self.focal <= 0:
             raise UserError(f"camera distance {self.distance:g} m, focal {self.focal:g}: both must be positive")
+
+
+def view_hulls(spec, vertices: int = VIEW_HULL_VERTICES) -> None:
+    """A spec edit (`scene.build_spec(extras=[view_hulls])`): each mesh geom that never collides, on a body whose
+    inertia is given (so the geom weighs nothing), gets a copy of its mesh with a convex hull of at most `vertices`
+    vertices for the camera to draw. Contacts, masses and the full meshes stay as they are."""
+    import mujoco
+
+    copies: dict[str, str] = {}
+    for geom in spec.geoms:
+        visual = geom.type == mujoco.mjtGeom.mjGEOM_MESH and not (geom.contype or geom.conaffinity)
+        if not visual or not geom.parent.explicitinertial and geom.parent != spec.worldbody:
+            continue
+        if geom.meshname not in copies:
+            mesh = spec.mesh(geom.meshname)
+            copies[geom.meshname] = f"{geom.meshname}_view"
+            # A convex inertia makes MuJoCo compute the hull of a mesh no contact needs.
+            spec.add_mesh(name=copies[geom.meshname], file=mesh.file, uservert=mesh.uservert, userface=mesh.userface,
+                          scale=mesh.scale, maxhullvert=vertices, inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX)  # fmt: skip
+        geom.meshname = copies[geom.meshname]
 
 
 class TwinCamera:

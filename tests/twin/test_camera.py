@@ -146,6 +146,38 @@ def test_meshes_with_a_hull_are_drawn_as_their_hull_unless_asked_for_in_full(ful
     assert ("ring" if blue > 2 * red else "table") == hole_shows
 
 
+def test_view_hulls_give_the_camera_light_meshes_and_leave_the_physics_alone():
+    import mujoco
+
+    from lerobot_contrast.twin.camera import view_hulls
+
+    def spec_with_rings():
+        spec = table(with_board=False)
+        ring = spec.add_mesh(name="ring")
+        ring.make_supertorus(48, 0.3, 1.0, 1.0)
+        ring.scale = [0.2, 0.2, 0.2]
+        weighed = spec.worldbody.add_body(name="weighed", pos=[0.3, 0.0, 0.05], mass=0.2, inertia=[1e-4] * 3,
+                                          explicitinertial=True)  # fmt: skip
+        weighed.add_freejoint()
+        weighed.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="ring", contype=0, conaffinity=0, group=2)
+        weighed.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="ring", group=3)
+        loose = spec.worldbody.add_body(name="loose", pos=[0.3, 0.2, 0.05])  # its mass comes from its geoms
+        loose.add_freejoint()
+        loose.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="ring", contype=0, conaffinity=0, group=2)
+        return spec
+
+    plain = spec_with_rings().compile()
+    edited_spec = spec_with_rings()
+    view_hulls(edited_spec, vertices=24)
+    edited = edited_spec.compile()
+    assert np.allclose(plain.body_mass, edited.body_mass) and np.allclose(plain.body_inertia, edited.body_inertia)
+    meshes = [mujoco.mj_id2name(edited, mujoco.mjtObj.mjOBJ_MESH, edited.geom_dataid[g]) for g in range(edited.ngeom)
+              if edited.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH]  # fmt: skip
+    assert meshes == ["ring_view", "ring", "ring"]  # the weighed body's visual geom only
+    view = mujoco.mj_name2id(edited, mujoco.mjtObj.mjOBJ_MESH, "ring_view")
+    assert 0 < edited.mesh_graph[edited.mesh_graphadr[view]] <= 24  # a hull of at most 24 vertices to draw
+
+
 def test_the_board_moves_and_comes_off_the_table():
     import mujoco
 
