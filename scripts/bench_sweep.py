@@ -28,6 +28,7 @@ from rich.console import Console
 from lerobot_contrast.build import register_robots
 from lerobot_contrast.sweep.carry import pack, unpack
 from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cluster import quiet_notes
 from lerobot_contrast.sweep.command import SweepConfig, execute
 from lerobot_contrast.sweep.shipping import shipped_paths
 from lerobot_contrast.sweep.worker import run_cell
@@ -61,6 +62,7 @@ def on_ray(path: Path, out: Path, workers: int) -> tuple[float, float, float]:
     """Ray's startup, the sweep's wall time and the time spent inside the cells, on a local Ray with `workers`
     CPUs."""
     start = time.perf_counter()
+    quiet_notes()
     ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
     started = time.perf_counter()
     try:

@@ -28,7 +28,8 @@ pytestmark = pytest.mark.slow
 
 ORACLE = {"max_episode_steps": 30, "rerun": False, "policy": {"type": "oracle"}}
 TINY = {"eval": {"n_instances": 2, **ORACLE}, "grid": {"seed": [0, 1]}}
-THREE = {"eval": {"n_instances": 2, **ORACLE}, "grid": {"seed": [0, 1, 2]}}
+# Three cells of 28 trials, one at a time on the node's one CPU: long enough to interrupt the second mid-way.
+THREE = {"eval": {"n_instances": 4, **ORACLE, "max_episode_steps": 40}, "grid": {"seed": [0, 1, 2]}}
 OURS = tuple(name.replace("-", "_") for name in DISTRIBUTIONS)
 
 
@@ -116,6 +117,11 @@ def run(cluster, spec: dict, name: str, *flags: str, env: dict | None = None) ->
     return proc.returncode, out + err, time.monotonic() - start
 
 
+def trials(run_dir: Path) -> int:
+    journal = run_dir / "journal.jsonl"
+    return journal.read_bytes().count(b"\n") if journal.exists() else 0
+
+
 def cells(out: Path) -> dict[str, dict]:
     return {cell["name"]: cell for cell in json.loads((out / "sweep.json").read_text())["cells"]}
 
@@ -150,14 +156,21 @@ def test_a_sweep_through_ray_client_interrupted_mid_way_resumes_with_nothing_los
     deadline = time.monotonic() + 240
     while not (out / "seed=0" / "summary.json").exists():
         assert driver.poll() is None and time.monotonic() < deadline, "the first cell never came back"
-        time.sleep(0.2)
+        time.sleep(0.1)
     first = (out / "seed=0" / "journal.jsonl").read_bytes()
+    running = cluster["root"] / "wtmp" / "lerobot_contrast_sweeps" / (out / MARK).read_text() / "seed=1"
+    while not trials(running):  # the second cell begun on the node's own disk
+        assert driver.poll() is None and time.monotonic() < deadline, "the second cell never began"
+        time.sleep(0.1)
     driver.send_signal(signal.SIGINT)
     assert driver.wait(timeout=60) == 130
+    # The trials the node recorded for the running cell, on its own disk: the resumed sweep keeps them.
+    begun = (running / "journal.jsonl").read_bytes() if (running / "journal.jsonl").exists() else b""
     code, output, _ = run(cluster, THREE, "client", f"--ray.address={cluster['client']}", "--resume=true")
     assert code == 0, output
-    assert_whole(out, planned=14)
+    assert_whole(out, planned=28)
     assert (out / "seed=0" / "journal.jsonl").read_bytes() == first  # complete, so not run again
+    assert (out / "seed=1" / "journal.jsonl").read_bytes().startswith(begun[: begun.rfind(b"\n") + 1])
 
 
 def test_a_wrong_address_or_token_is_one_line_in_seconds(cluster):

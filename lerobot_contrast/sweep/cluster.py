@@ -38,7 +38,7 @@ def join(args: RayArgs) -> None:
     is."""
     if ray.is_initialized():
         return
-    _quiet()
+    quiet_notes()
     quiet = {"log_to_driver": False, "logging_level": logging.WARNING}
     if args.address is None:
         local = {"num_cpus": args.num_cpus or os.cpu_count(), "num_gpus": args.num_gpus, "include_dashboard": False}
@@ -59,14 +59,14 @@ def join(args: RayArgs) -> None:
 def reach(given: str) -> str:
     """The head's HOST:PORT (its client port for ray://), checked to answer and to take this machine's token (sent
     wherever one is found): each failure one line, in seconds."""
-    _quiet()
+    quiet_notes()
     address = head_address(given)
     use_token_if_any()
     check_token(given, address)
     return address
 
 
-def _quiet() -> None:
+def quiet_notes() -> None:
     for name in NOISY:
         logging.getLogger(name).setLevel(logging.ERROR)
 
