@@ -1,0 +1,162 @@
+"""The twin's placement commands: a ZMQ REP socket on 127.0.0.1 taking one JSON object per request, since no hand can
+move the twin's objects. Requests and their replies (all lengths in metres, task frame: arm base at the origin, x
+forward, y to the arm's left; every reply has "ok", and "error" with one line when "ok" is false):
+
+  {"cmd": "place", "object": NAME, "x": m, "y": m, "yaw": rad}  put an object down there, at rest (yaw optional)
+  {"cmd": "scene"}                       -> {"objects": {NAME: [x, y, yaw]}, "z": {NAME: z}}: the true poses
+  {"cmd": "board", "x": m, "y": m, "yaw_deg": deg}  lay the printed calibration board on the table
+  {"cmd": "remove_board"}               -> {"removed": bool}
+  {"cmd": "reset_arm"}                  put the arm at rest at once
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import threading
+from typing import Any
+
+import zmq
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.domains.task_file.schema import TaskSpec
+from lerobot_contrast.twin.physics import Physics
+from lerobot_contrast.twin.scene import object_sizes, table_extent
+
+HOST = "127.0.0.1"
+DEFAULT_PORT = 5556
+COMMANDS = ("place", "scene", "board", "remove_board", "reset_arm")
+POLL_MS = 100  # how often the serving thread looks up to see whether it should stop
+
+
+class RequestError(ValueError):
+    """A request the twin cannot carry out; its message is the reply's one-line error."""
+
+
+class PlacementServer:
+    """Answers placement requests for `physics`, whose world was built from `task`, on `port` of 127.0.0.1."""
+
+    def __init__(self, physics: Physics, task: TaskSpec, port: int = DEFAULT_PORT) -> None:
+        self.physics, self.task, self.port = physics, task, port
+        self.address = f"tcp://{HOST}:{port}"
+        self._context = zmq.Context()
+        self._socket = self._context.socket(zmq.REP)
+        self._socket.setsockopt(zmq.LINGER, 0)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def start(self) -> str:
+        """Bind (a port in use is one line saying so) and serve on a daemon thread; returns the address."""
+        try:
+            self._socket.bind(self.address)
+        except zmq.ZMQError as error:
+            self._socket.close()
+            self._context.term()
+            raise UserError(
+                f"control port {self.port} on {HOST}: {error.strerror}; choose a free one with --control_port"
+            ) from None
+        self._thread = threading.Thread(target=self._serve, name="twin-placement", daemon=True)
+        self._thread.start()
+        return self.address
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+            self._thread = None
+        self._socket.close()
+        self._context.term()
+
+    def _serve(self) -> None:
+        while not self._stop.is_set():
+            if not self._socket.poll(POLL_MS):
+                continue
+            self._socket.send_string(json.dumps(self.answer(self._socket.recv())))
+
+    def answer(self, message: bytes) -> dict[str, Any]:
+        """The reply to one request, as sent back."""
+        try:
+            request = json.loads(message)
+            if not isinstance(request, dict):
+                raise ValueError
+        except ValueError:
+            return _error('malformed request: send one JSON object, e.g. {"cmd": "scene"}')
+        try:
+            return {"ok": True, **self.handle(request)}
+        except RequestError as error:
+            return _error(str(error))
+
+    def handle(self, request: dict[str, Any]) -> dict[str, Any]:
+        command = request.get("cmd")
+        if command not in COMMANDS:
+            raise RequestError(f'unknown command {command!r} in "cmd"; use one of: {", ".join(COMMANDS)}')
+        if command == "scene":
+            poses = self.physics.poses()
+            return {
+                "objects": {name: [x, y, yaw] for name, (x, y, _, yaw) in poses.items()},
+                "z": {name: z for name, (_, _, z, _) in poses.items()},
+            }
+        if command == "place":
+            self._place(request)
+        elif command == "board":
+            from lerobot_contrast.twin.board import add_board
+
+            x, y, yaw_deg = (_number(request, key) for key in ("x", "y", "yaw_deg"))
+            self.physics.edit(lambda spec: add_board(spec, x, y, yaw_deg))
+        elif command == "remove_board":
+            from lerobot_contrast.twin.board import remove_board
+
+            removed = []
+            self.physics.edit(lambda spec: removed.append(remove_board(spec)))
+            return {"removed": bool(removed and removed[0])}
+        else:
+            self.physics.reset_arm()
+        return {}
+
+    def _place(self, request: dict[str, Any]) -> None:
+        name = request.get("object")
+        objects = self.task.objects
+        if name not in objects:
+            raise RequestError(f"unknown object {name!r}; the twin's task {self.task.name} has: {', '.join(objects)}")
+        if not objects[name].movable:
+            raise RequestError(f"{name} is fixed in the task file (movable: false); it cannot be placed")
+        x, y = _number(request, "x"), _number(request, "y")
+        yaw = _number(request, "yaw") if "yaw" in request else 0.0
+        half = object_sizes(self.task)[name] / 2
+        (x0, x1), (y0, y1) = table_extent(self.task)
+        if not (x0 + half <= x <= x1 - half and y0 + half <= y <= y1 - half):
+            raise RequestError(
+                f"({x:.3f}, {y:.3f}) m is off the table, which spans x {x0:.2f} to {x1:.2f} m and y {y0:.2f} to "
+                f"{y1:.2f} m (metres, not centimetres)"
+            )
+        self.physics.place(name, x, y, yaw)
+
+
+def _number(request: dict[str, Any], key: str) -> float:
+    value = request.get(key)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise RequestError(f"{request.get('cmd')}: {key!r} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _error(message: str) -> dict[str, Any]:
+    return {"ok": False, "error": message}
+
+
+def request(command: dict[str, Any], port: int = DEFAULT_PORT, timeout_s: float = 5.0) -> dict[str, Any]:
+    """Send one command to a running twin and return its reply; no twin answering is one line saying so."""
+    context = zmq.Context()
+    socket = context.socket(zmq.REQ)
+    socket.setsockopt(zmq.LINGER, 0)
+    try:
+        socket.connect(f"tcp://{HOST}:{port}")
+        socket.send_string(json.dumps(command))
+        if not socket.poll(round(timeout_s * 1000)):
+            raise UserError(
+                f"no twin answers on tcp://{HOST}:{port} within {timeout_s:g} s; start it with "
+                "`python -m lerobot_contrast.twin` or give the --control_port it printed"
+            )
+        return json.loads(socket.recv())
+    finally:
+        socket.close()
+        context.term()

@@ -1,0 +1,133 @@
+"""The twin process's parts, started in order and stopped in reverse: the servo bank with its calibration file, the
+physics, the placement socket, the camera publisher and the serial bus."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.domains.task_file import load_task_file
+from lerobot_contrast.domains.task_file.world import sample_scene
+from lerobot_contrast.twin.faults import FaultsConfig
+
+CAMERA_NAME = "front"
+
+
+@dataclass
+class TwinConfig:
+    """Start a virtual SO-101 bench: LeRobot's `so101_follower` connects to its serial port and LeRobot's `zmq`
+    camera to its webcam as to the real arm's; objects are placed with `python -m lerobot_contrast.twin.place`.
+    Runs until Ctrl-C."""
+
+    # The task file whose table, objects and bins the twin builds: a path or a shipped example's name.
+    task: str = "so101_blocks"
+    # The robot id LeRobot is given (--robot.id): the calibration file is written under this name.
+    robot_id: str = "twin"
+    # Where to write the calibration file (default: LeRobot's own calibration folder); give eval the same
+    # --robot.calibration_dir.
+    calibration_dir: Path | None = None
+    # Frames per second the camera publishes: the control rate.
+    fps: int = 30
+    # Camera frame width in pixels.
+    width: int = 640
+    # Camera frame height in pixels.
+    height: int = 480
+    # The lens's radial distortion k1 (-0.3: a wide-angle USB webcam; 0: a perfect pinhole).
+    lens_k1: float = -0.3
+    # The port of the camera's ZMQ publisher on 127.0.0.1.
+    camera_port: int = 5555
+    # The port of the placement command socket on 127.0.0.1.
+    control_port: int = 5556
+    # Seed of the objects' first placement and of the camera's sensor noise.
+    seed: int = 0
+    faults: FaultsConfig = field(default_factory=FaultsConfig)
+
+
+class Twin:
+    """The running bench of `config`; `camera=False` leaves the webcam out (tests of the arm alone)."""
+
+    def __init__(self, config: TwinConfig, camera: bool = True) -> None:
+        from lerobot_contrast.twin import arm  # MuJoCo loads here, after the caller chose its GL backend
+        from lerobot_contrast.twin.physics import Physics
+        from lerobot_contrast.twin.scene import build_spec
+        from lerobot_contrast.twin.servos import ServoBank
+
+        self.config = config
+        self.task = load_task_file(config.task).spec
+        scene = sample_scene(self.task, np.random.default_rng(config.seed))
+        self.bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
+        self.physics = Physics(build_spec(self.task, scene), self.bank, self.task.objects)
+        self.with_camera = camera
+        self.endpoints: dict[str, str] = {}
+        self._running: list = []
+
+    def start(self) -> dict[str, str]:
+        """Start every part; a part that cannot start stops the ones before it and raises one line."""
+        from lerobot_contrast.twin.bus_server import BusServer
+        from lerobot_contrast.twin.calibration_file import write_calibration_file
+        from lerobot_contrast.twin.placement import PlacementServer
+
+        try:
+            path = write_calibration_file(self.bank, self.config.robot_id, self.config.calibration_dir)
+        except OSError as error:
+            raise UserError(str(error)) from None
+        self.endpoints["calibration"] = str(path)
+        try:
+            placement = PlacementServer(self.physics, self.task, self.config.control_port)
+            self.endpoints["placement"] = placement.start()
+            self._running.append(placement)
+            if self.with_camera:
+                self.endpoints["camera"] = self._start_camera()
+            bus = BusServer(self.bank, self.config.faults)
+            self.endpoints["bus"] = bus.start()
+            self._running.append(bus)
+            self.physics.start()
+            self._running.append(self.physics)
+        except BaseException:
+            self.stop()
+            raise
+        return self.endpoints
+
+    def _start_camera(self) -> str:
+        from lerobot_contrast.twin.camera import CameraArgs, TwinCamera
+        from lerobot_contrast.twin.camera_server import CameraServer
+        from lerobot_contrast.twin.lens import LensArgs
+
+        config = self.config
+        (x0, x1), (y0, y1) = self.task.workspace.area.box
+        lens = LensArgs(k1=config.lens_k1, seed=config.seed)
+        camera = TwinCamera(((x0 + x1) / 2, (y0 + y1) / 2, 0.0), CameraArgs(config.width, config.height), lens)
+
+        def render() -> np.ndarray:
+            self.physics.read(camera.capture)
+            return camera.develop()
+
+        server = CameraServer(render, CAMERA_NAME, config.camera_port, config.fps, close=camera.close)
+        address = server.start()
+        self._running.append(server)
+        return address
+
+    def stop(self) -> None:
+        while self._running:
+            self._running.pop().stop()
+
+    def eval_flags(self) -> str:
+        """The flags that point `python -m lerobot_contrast.eval` (or any LeRobot command) at this twin."""
+        config = self.config
+        flags = [
+            "--robot.type=so101_follower",
+            f"--robot.port={self.endpoints['bus']}",
+            f"--robot.id={config.robot_id}",
+        ]
+        if config.calibration_dir is not None:
+            flags.append(f"--robot.calibration_dir={config.calibration_dir}")
+        if "camera" in self.endpoints:
+            camera = (
+                f"{{{CAMERA_NAME}: {{type: zmq, server_address: 127.0.0.1, port: {config.camera_port}, "
+                f"camera_name: {CAMERA_NAME}, width: {config.width}, height: {config.height}, fps: {config.fps}}}}}"
+            )
+            flags.append(f"--robot.cameras='{camera}'")
+        return " ".join(flags)
