@@ -2,8 +2,8 @@
 simulator's own, and where the colour check places randomly laid cubes against where they are. Then through a lens:
 the synthetic webcam (640 x 480, oblique poses at elevation 25-85 degrees, any azimuth, radial k1 of 0, -0.12 and
 -0.3) photographs the board laid near the workspace's centre; the farthest a cube's centre anywhere on the so101_blocks
-workspace is placed from where it is, with the lens measured and with the homography alone, and how many poses
-calibrate refuses.
+workspace is placed from where it is, and the farthest the colour check places four 3 cm cubes standing at the
+workspace's corners, with the lens measured and with the homography alone, and how many poses calibrate refuses.
 
     .venv/bin/python scripts/bench_staging.py [--layouts=200] [--poses=12]
 
@@ -28,6 +28,7 @@ WORKSPACE = ((0.15, -0.25), (0.45, 0.25))  # so101_blocks
 GRID = np.array([[x, y] for x in np.linspace(0.15, 0.45, 7) for y in np.linspace(-0.25, 0.25, 7)])
 CUBES = ("red_cube", "green_cube", "blue_cube", "yellow_cube")
 LENSES = (0.0, -0.12, -0.3)
+CORNER_CUBES = {"red": (0.175, 0.225), "green": (0.175, -0.225), "blue": (0.425, 0.225), "yellow": (0.425, -0.225)}
 CUBE_CENTRE = 0.015  # a 3 cm cube is placed where the ray through its centre meets the plane at half its height
 
 
@@ -65,13 +66,23 @@ def located_off_cm(calibration: homography.CameraCalibration, camera: ObliqueCam
     return float(np.max(np.linalg.norm(calibration.to_table(seen, CUBE_CENTRE) - GRID, axis=1)) * 100)
 
 
+def cubes_off_cm(calibration: homography.CameraCalibration, camera: ObliqueCamera) -> float:
+    """The farthest the colour check places four cubes standing at the workspace's corners from where they are."""
+    found = locate.find_objects(
+        board_photo(camera, None, cubes=CORNER_CUBES), calibration, {c: c for c in CORNER_CUBES}, WORKSPACE, 0.03
+    )
+    if len(found) < len(CORNER_CUBES):
+        return float("inf")
+    return max(float(np.hypot(x - CORNER_CUBES[c][0], y - CORNER_CUBES[c][1])) * 100 for c, (x, y) in found.items())
+
+
 def lens_figures(poses: int) -> dict[str, float]:
     """Per lens: the worst placement over the accepted poses (lens measured; homography alone), the poses the
     homography alone puts past the 2 cm staging tolerance, and the refusals."""
     figures = {}
     for k1 in LENSES:
         rng = np.random.default_rng(1)
-        worst, worst_plain, refused, plain_past_2cm = 0.0, 0.0, 0, 0
+        worst, worst_plain, refused, plain_past_2cm, cubes, cubes_plain = 0.0, 0.0, 0, 0, 0.0, 0.0
         for pose in range(poses):
             camera = ObliqueCamera(rng.uniform(25, 85), rng.uniform(0, 360), k1)
             where = board.BoardArgs(0.30 + rng.uniform(-0.03, 0.03), rng.uniform(-0.05, 0.05), rng.uniform(-20, 20))
@@ -79,12 +90,19 @@ def lens_figures(poses: int) -> dict[str, float]:
             plain = homography.fit("front", photo, where, 2.0, WORKSPACE, lens=False)
             worst_plain = max(worst_plain, located_off_cm(plain, camera))
             plain_past_2cm += located_off_cm(plain, camera) > 2.0
+            cubes_plain = max(cubes_plain, cubes_off_cm(plain, camera))
             try:
-                worst = max(worst, located_off_cm(homography.fit("front", photo, where, 2.0, WORKSPACE), camera))
+                calibration = homography.fit("front", photo, where, 2.0, WORKSPACE)
             except UserError:
                 refused += 1
+                continue
+            worst, cubes = (
+                max(worst, located_off_cm(calibration, camera)),
+                max(cubes, cubes_off_cm(calibration, camera)),
+            )
         name = f"lens_k1_{abs(k1):g}"
         figures |= {f"{name}_max_cm": round(worst, 2), f"{name}_plain_max_cm": round(worst_plain, 2)}
+        figures |= {f"{name}_cubes_max_cm": round(cubes, 2), f"{name}_cubes_plain_max_cm": round(cubes_plain, 2)}
         figures |= {f"{name}_plain_past_2cm": plain_past_2cm, f"{name}_refused": refused}
     return figures | {"lens_poses": poses}
 

@@ -16,15 +16,15 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.staging import board
-from lerobot_contrast.staging.lens import Lens, fit_lens, spread_m
+from lerobot_contrast.staging.lens import FALLBACK_FOCAL_FRACTION, Lens, fit_lens, spread_m
 
 CALIBRATION_VERSION = 2  # 2: the lens; files of version 1 (a homography alone) still load, as a lens-free camera
 READABLE_VERSIONS = (1, 2)
 MIN_MARKERS = 4  # fewer leaves the fit unchecked (one marker's four corners fit any homography exactly)
-# Used where the homography cannot tell the focal length (a camera looking straight down): a typical webcam's.
-FALLBACK_FOCAL_FRACTION = 0.8
+# Nearer square on than this (the camera's axis to the table's normal), one view cannot tell the focal length.
+MIN_TILT_DEG = 5.0
 # The most the lens's uncertainty (k1 +- 3 standard deviations) may move a point of the workspace: half the 2 cm
-# staging tolerance would leave too little for the rest, a quarter of it does not.
+# staging tolerance, so that a cube placed right is never flagged for the lens alone.
 MAX_SPREAD_M = 0.01
 
 
@@ -121,6 +121,15 @@ def _focal(homography: np.ndarray, cx: float, cy: float) -> float | None:
     return 1.0 / math.sqrt(inverse_square)
 
 
+def _focal_guess(calibration: CameraCalibration) -> float | None:
+    """The focal length the homography implies, None where the view is too nearly square on to tell it."""
+    _, rotation, _ = calibration.pose()
+    if math.degrees(math.acos(min(1.0, abs(rotation[2, 2])))) < MIN_TILT_DEG:
+        return None
+    width, height = calibration.image_size
+    return _focal(calibration.homography, (width - 1) / 2, (height - 1) / 2)
+
+
 def detect_board(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Board-frame points (N, 2) and their pixels (N, 2) for every marker corner found, and how many markers."""
     grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
@@ -154,9 +163,9 @@ def fit(
     size = (image.shape[1], image.shape[0])
     fitted = None
     if lens:
-        plain = cv2.findHomography(table, pixels, 0)[0]
+        plain = CameraCalibration(camera, size, cv2.findHomography(table, pixels, 0)[0], 0.0, markers)
         try:
-            fitted = fit_lens(table, pixels, size, _focal(plain, (size[0] - 1) / 2, (size[1] - 1) / 2))
+            fitted = fit_lens(table, pixels, size, _focal_guess(plain))
         except cv2.error:
             raise CalibrationError(
                 f"camera {camera}: the markers seen cannot measure the lens; lay the whole board flat in view"

@@ -8,6 +8,7 @@ targets drawn on the live view are distorted back.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -26,6 +27,8 @@ FLAGS = (
     | cv2.CALIB_FIX_K3
 )
 SIGMAS = 3.0  # the lens's spread is judged at k1 +- 3 standard deviations
+FALLBACK_FOCAL_FRACTION = 0.8  # of the image's width: a typical webcam's, where one view cannot tell it
+MAX_FOCAL_SIGMA = 0.1  # relative: a focal length less sure than this is not used (then the fallback is)
 
 
 @dataclass(frozen=True)
@@ -85,18 +88,30 @@ class Lens:
 
 def fit_lens(table: np.ndarray, pixels: np.ndarray, image_size: tuple[int, int], focal: float | None) -> Lens:
     """The lens that sends the board's points on the table (N, 2) to where they were seen (N, 2); `focal` is the
-    guess (None where one view cannot tell it, looking straight down: then it stays at a typical webcam's)."""
+    guess (None where one view cannot tell it, looking nearly straight down: then it stays at a typical webcam's)."""
     width, height = image_size
     centre = ((width - 1) / 2, (height - 1) / 2)
-    guess = Lens(focal or 0.8 * width, centre, 0.0)
+    fallback = Lens(FALLBACK_FOCAL_FRACTION * width, centre, 0.0)
+    fitted, focal_sigma = _calibrate(table, pixels, image_size, Lens(focal or fallback.focal, centre, 0.0), not focal)
+    if focal_sigma > MAX_FOCAL_SIGMA * fitted.focal:  # the view does not tell the focal length after all
+        fitted, _ = _calibrate(table, pixels, image_size, fallback, fixed_focal=True)
+    return fitted
+
+
+def _calibrate(
+    table: np.ndarray, pixels: np.ndarray, size: tuple[int, int], guess: Lens, fixed_focal: bool
+) -> tuple[Lens, float]:
+    """The lens fitted from `guess`, and the standard deviation of its focal length (0 when fixed)."""
     objects = np.column_stack([table, np.zeros(len(table))]).astype(np.float32)
-    flags = FLAGS | (cv2.CALIB_FIX_FOCAL_LENGTH if focal is None else 0)
+    flags = FLAGS | (cv2.CALIB_FIX_FOCAL_LENGTH if fixed_focal else 0)
     criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
     _, matrix, coefficients, *_, deviations, _, _ = cv2.calibrateCameraExtended(
-        [objects], [pixels.astype(np.float32)], image_size, guess.matrix, np.zeros(5), flags=flags, criteria=criteria
+        [objects], [pixels.astype(np.float32)], size, guess.matrix, guess.coefficients, flags=flags, criteria=criteria
     )
-    sigma = float(deviations.ravel()[4])
-    return Lens(float(matrix[0, 0]), centre, float(coefficients.ravel()[0]), 0.0, sigma if np.isfinite(sigma) else 1.0)
+    # With the aspect ratio fixed OpenCV fits fy and derives fx: the focal length's deviation is fy's.
+    focal_sigma, sigma = (float(d) if np.isfinite(d) else math.inf for d in deviations.ravel()[[1, 4]])
+    k1 = float(coefficients.ravel()[0])
+    return Lens(float(matrix[0, 0]), guess.centre, k1, 0.0, min(sigma, 1.0)), focal_sigma
 
 
 def spread_m(table: np.ndarray, pixels: np.ndarray, lens: Lens, workspace: np.ndarray) -> float:

@@ -27,20 +27,27 @@ MIN_PIXELS = 12  # smaller blobs are noise, or an object mostly hidden (by the a
 # (its top and sides show too); anything else is clutter of the same colour, or the object mostly hidden.
 AREA_RANGE = (0.25, 6.0)
 OUTLINE_POINTS = 16  # per edge of the workspace's outline
+# An object standing inside the workspace shows at least this share of its pixels within the workspace's outline on
+# the table (its top may show past the far edge); a blob mostly past the edge is something beyond it.
+MIN_BASE_SHARE = 0.3
 
 
 def workspace_mask(
-    calibration: CameraCalibration, bounds: tuple[tuple[float, float], tuple[float, float]]
+    calibration: CameraCalibration, bounds: tuple[tuple[float, float], tuple[float, float]], height: float = 0.0
 ) -> np.ndarray:
-    """Pixels whose table point lies inside `bounds` ((x_min, y_min), (x_max, y_max)), as a uint8 mask."""
+    """Pixels whose table point lies inside `bounds` ((x_min, y_min), (x_max, y_max)), as a uint8 mask; with
+    `height`, also those where objects that tall standing inside it show (their tops reach past its far edge)."""
     (x0, y0), (x1, y1) = bounds
     # Each edge sampled along its length: through a wide-angle lens the workspace's straight edges are curves.
     along = np.linspace(0, 1, OUTLINE_POINTS, endpoint=False)[:, None]
     corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
     outline = np.concatenate([a + along * (b - a) for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True)])
-    width, height = calibration.image_size
-    mask = np.zeros((height, width), np.uint8)
+    width, image_height = calibration.image_size
+    mask = np.zeros((image_height, width), np.uint8)
     cv2.fillPoly(mask, [np.round(calibration.to_pixels(outline)).astype(np.int32)], 255)
+    if height > 0:
+        raised = np.concatenate([calibration.to_pixels(outline), calibration.lift(outline, height)])
+        cv2.fillPoly(mask, [cv2.convexHull(np.round(raised).astype(np.int32))], 255)
     return mask
 
 
@@ -59,21 +66,39 @@ def find_objects(
     bounds: tuple[tuple[float, float], tuple[float, float]],
     height: float,
 ) -> dict[str, tuple[float, float]]:
-    """Table (x, y) of each object in `colours` ({name: colour}) seen in the RGB `image`; unseen ones are left out."""
-    inside = workspace_mask(calibration, bounds)
+    """Table (x, y) of each object in `colours` ({name: colour}) seen in the RGB `image`; unseen ones are left out.
+    The object is the largest blob of its colour standing on the workspace, seen with the part of it that shows past
+    the workspace's far edge (a tall object's top), or, where that merges it with something beyond the edge, without."""
+    base = workspace_mask(calibration, bounds)
+    regions = (workspace_mask(calibration, bounds, height), base)
     found: dict[str, tuple[float, float]] = {}
     for name, colour in colours.items():
-        mask = colour_mask(image, colour) & inside
-        count, _, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
-        if count < 2:
-            continue
-        best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-        area = stats[best, cv2.CC_STAT_AREA]
-        x, y = calibration.to_table(centroids[best][None, :], height / 2)[0]
-        expected = _footprint_pixels(calibration, x, y, height)
-        if area >= MIN_PIXELS and AREA_RANGE[0] * expected <= area <= AREA_RANGE[1] * expected:
-            found[name] = (float(x), float(y))
+        seen = colour_mask(image, colour)
+        for region in regions:
+            place = _blob_place(seen & region, base > 0, calibration, height)
+            if place is not None:
+                found[name] = place
+                break
     return found
+
+
+def _blob_place(
+    mask: np.ndarray, base: np.ndarray, calibration: CameraCalibration, height: float
+) -> tuple[float, float] | None:
+    """Where the largest blob in `mask` with enough of it on the workspace's `base` stands, if its size is an
+    object's."""
+    count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    on_base = np.bincount(labels[base], minlength=count)
+    standing = [i for i in range(1, count) if on_base[i] >= MIN_BASE_SHARE * stats[i, cv2.CC_STAT_AREA]]
+    if not standing:
+        return None
+    best = max(standing, key=lambda i: stats[i, cv2.CC_STAT_AREA])
+    area = stats[best, cv2.CC_STAT_AREA]
+    x, y = calibration.to_table(centroids[best][None, :], height / 2)[0]
+    expected = _footprint_pixels(calibration, x, y, height)
+    if area >= MIN_PIXELS and AREA_RANGE[0] * expected <= area <= AREA_RANGE[1] * expected:
+        return float(x), float(y)
+    return None
 
 
 def _footprint_pixels(calibration: CameraCalibration, x: float, y: float, size: float) -> float:

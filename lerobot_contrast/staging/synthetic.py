@@ -5,6 +5,7 @@ table from an oblique pose, photographing the printed board lying on it with une
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import cv2
@@ -13,6 +14,8 @@ import numpy as np
 from lerobot_contrast.staging import board
 
 TABLE_RGB = np.array([150.0, 138.0, 118.0])
+CUBE_RGB = {"red": (200, 35, 35), "green": (45, 165, 70), "blue": (40, 80, 205), "yellow": (225, 200, 40)}
+CUBE_M = 0.03
 SUPERSAMPLE = 2  # rendered at twice the size, then averaged down: the board's edges antialiased as a sensor's are
 STRIDE = 8  # (supersampled) pixels between the points where the page's position is computed exactly
 ITERATIONS = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)  # undistorting far from the centre
@@ -39,6 +42,12 @@ class ObliqueCamera:
     @property
     def distortion(self) -> np.ndarray:
         return np.array([self.k1, 0.0, 0.0, 0.0, 0.0])
+
+    @property
+    def centre(self) -> np.ndarray:
+        """Where the camera is, on the table's frame (metres)."""
+        rotation, translation = self.pose()
+        return -rotation.T @ translation
 
     def pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Rotation and translation (table -> camera), the distance bisected until the workspace fills the frame."""
@@ -97,11 +106,46 @@ class ObliqueCamera:
         return float(np.max(np.abs(seen) / ((self.width - 1) / 2, (self.height - 1) / 2)))
 
 
-def board_photo(camera: ObliqueCamera, where: board.BoardArgs, seed: int = 0, quality: int = 85) -> np.ndarray:
-    """An RGB frame of the table with the printed board lying on it as `where` says, as a webcam gives it."""
+def board_photo(
+    camera: ObliqueCamera, where: board.BoardArgs | None, seed: int = 0, quality: int = 85,
+    cubes: Mapping[str, tuple[float, float]] | None = None,
+) -> np.ndarray:  # fmt: skip
+    """An RGB frame of the table, as a webcam gives it, with the printed board lying on it as `where` says (None: no
+    board) and `cubes` ({colour: (x, y)}, 3 cm, red, green, blue or yellow) standing on it."""
+    size = (camera.width * SUPERSAMPLE, camera.height * SUPERSAMPLE)
+    image = np.broadcast_to(TABLE_RGB, (*size[::-1], 3)) if where is None else _paper(camera, where, size)
+    image = np.ascontiguousarray(image)
+    centre = camera.centre
+    for colour, (x, y) in sorted((cubes or {}).items(), key=lambda item: -np.hypot(*(item[1] - centre[:2]))):
+        _draw_cube(image, camera, np.array([x, y]), CUBE_RGB[colour])
+    image = cv2.resize(image, (camera.width, camera.height), interpolation=cv2.INTER_AREA)
+    return _as_webcam(image, np.random.default_rng(seed), quality)
+
+
+def _draw_cube(image: np.ndarray, camera: ObliqueCamera, xy: np.ndarray, rgb: tuple[int, int, int]) -> None:
+    """Paint the faces of a cube standing at `xy` that face the camera (the top lit, the sides shaded)."""
+    half = CUBE_M / 2
+    along = np.linspace(0, 1, 8, endpoint=False)[:, None]  # edges sampled: the lens bends them
+    for axis, sign, shade in ((2, 1, 1.0), (0, 1, 0.75), (0, -1, 0.75), (1, 1, 0.6), (1, -1, 0.6)):
+        normal = np.zeros(3)
+        normal[axis] = sign
+        middle = np.array([*xy, half]) + half * normal
+        if normal @ (camera.centre - middle) <= 0:
+            continue
+        u, v = (np.eye(3)[i] * half for i in range(3) if i != axis)
+        corners = np.array([middle - u - v, middle + u - v, middle + u + v, middle - u + v])
+        outline = np.concatenate(
+            [a + along * (b - a) for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True)]
+        )
+        pixels = (camera.project(outline) + 0.5) * SUPERSAMPLE - 0.5
+        colour = tuple(float(c) * shade for c in rgb)
+        cv2.fillPoly(image, [np.round(pixels * 16).astype(np.int32)], colour, cv2.LINE_AA, shift=4)
+
+
+def _paper(camera: ObliqueCamera, where: board.BoardArgs, size: tuple[int, int]) -> np.ndarray:
+    """The table with the printed page lying on it, at the supersampled `size`."""
     page, per_m = board.page_image(dpi=200)
     margin = round(board.MARGIN_M * per_m)
-    size = (camera.width * SUPERSAMPLE, camera.height * SUPERSAMPLE)
     # Where each pixel sees the page varies smoothly: computed at the centre of every STRIDE x STRIDE block, then
     # interpolated (cv2.resize's linear sampling puts those centres exactly where they belong).
     coarse = (size[0] // STRIDE, size[1] // STRIDE)
@@ -114,9 +158,7 @@ def board_photo(camera: ObliqueCamera, where: board.BoardArgs, seed: int = 0, qu
     )
     paper = cv2.remap(page, map_x, map_y, cv2.INTER_LINEAR, borderValue=0).astype(np.float64) / 255
     covered = cv2.remap(np.ones_like(page), map_x, map_y, cv2.INTER_NEAREST, borderValue=0) > 0
-    image = np.where(covered[..., None], paper[..., None] * (235.0, 235.0, 230.0), TABLE_RGB)
-    image = cv2.resize(image, (camera.width, camera.height), interpolation=cv2.INTER_AREA)
-    return _as_webcam(image, np.random.default_rng(seed), quality)
+    return np.where(covered[..., None], paper[..., None] * (235.0, 235.0, 230.0), TABLE_RGB)
 
 
 def _table_to_board(xy: np.ndarray, where: board.BoardArgs) -> np.ndarray:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.calibrate import main
-from lerobot_contrast.staging import board, homography
+from lerobot_contrast.staging import board, homography, locate
 from lerobot_contrast.staging.synthetic import ObliqueCamera, board_photo
 
 WORKSPACE = ((0.15, -0.25), (0.45, 0.25))  # so101_blocks
@@ -38,6 +38,20 @@ def test_a_wide_angle_lens_is_measured_and_the_workspace_located_within_1_cm(ele
     assert np.abs(calibration.to_pixels(GRID) - camera.project(np.column_stack([GRID, np.zeros(len(GRID))]))).max() < 2
     raised = camera.project(np.column_stack([GRID, np.full(len(GRID), 0.03)]))
     assert np.abs(calibration.lift(GRID, 0.03) - raised).max() < 3
+
+
+def test_cubes_at_the_workspaces_corners_are_found_within_1_cm_through_the_lens():
+    camera = ObliqueCamera(76, 12, k1=-0.3)
+    photo = board_photo(camera, WHERE, seed=1)
+    cubes = {"red": (0.175, 0.225), "green": (0.175, -0.225), "blue": (0.425, 0.225), "yellow": (0.425, -0.225)}
+    table = board_photo(camera, None, seed=2, cubes=cubes)
+    farthest = {}
+    for lens in (True, False):
+        calibration = homography.fit("front", photo, WHERE, 2.0, WORKSPACE, lens=lens)
+        found = locate.find_objects(table, calibration, {colour: colour for colour in cubes}, WORKSPACE, 0.03)
+        assert set(found) == set(cubes)
+        farthest[lens] = max(np.hypot(x - cubes[c][0], y - cubes[c][1]) * 100 for c, (x, y) in found.items())
+    assert farthest[True] < 1.0 and farthest[False] > 1.2  # the homography alone: past 1 cm at the corners
 
 
 def hide_markers(image: np.ndarray, keep: set[int]) -> np.ndarray:
