@@ -1,9 +1,5 @@
-"""The camera's lens: OpenCV's radial model (k1, principal point at the image's centre, square pixels) fitted from the
-board's marker corners in one view, and how far its uncertainty moves points across the workspace.
-
-A wide-angle webcam bends straight lines (k1 about -0.3): a homography alone fits the board under half a pixel yet is
-centimetres off at the workspace's edges, past the board. Points are undistorted before the homography, and the
-targets drawn on the live view are distorted back.
+"""The camera's lens (a wide-angle webcam's bends straight lines): OpenCV's radial model fitted from the board's
+marker corners in one view, and how far its uncertainty moves points across the workspace.
 """
 
 from __future__ import annotations
