@@ -123,6 +123,8 @@ class TwinCamera:
         costs a copy, the drawing happens in `develop`."""
         if model is not self._model:
             self._open(model)
+        # The free camera's field of view is the model's: set it each time, another camera may share the model.
+        model.vis.global_.fovy = self.lens.canvas_fovy_deg()
         self._renderer.update_scene(data, self._camera)
         if not self.args.full_meshes:
             self._draw_hulls()
@@ -150,9 +152,8 @@ class TwinCamera:
 
         self.close()
         width, height = self.lens.canvas_size
-        # The free camera takes its field of view from the model; shadows, reflections and multisampling cost
-        # 10x the render time on a CPU renderer, and a webcam's frame softens edges anyway.
-        model.vis.global_.fovy = self.lens.canvas_fovy_deg()
+        # Shadows, reflections and multisampling cost 10x the render time on a CPU renderer, and a webcam's frame
+        # softens edges anyway.
         model.vis.global_.orthographic = 0
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, height)
