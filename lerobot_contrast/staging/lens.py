@@ -29,8 +29,8 @@ MAX_FOCAL_SIGMA = 0.1  # relative: a focal length less sure than this is not use
 
 @dataclass(frozen=True)
 class Lens:
-    """Pixels follow OpenCV's model: ideal pixel (focal * x + cx, focal * y + cy) with (x, y) scaled by
-    1 + k1 r^2 + k2 r^4."""
+    """OpenCV's model: a ray (x, y, 1) shows at focal * (x, y) * (1 + k1 r^2 + k2 r^4) + centre, r^2 = x^2 + y^2;
+    a lens-free camera would show it at focal * (x, y) + centre (its ideal pixel)."""
 
     focal: float
     centre: tuple[float, float]

@@ -40,6 +40,15 @@ def test_a_wide_angle_lens_is_measured_and_the_workspace_located_within_1_cm(ele
     assert np.abs(calibration.lift(GRID, 0.03) - raised).max() < 3
 
 
+@pytest.mark.parametrize(("elevation", "azimuth"), [(85, 0), (88, 45)])
+def test_a_camera_looking_nearly_straight_down_is_calibrated_at_a_webcams_focal_length(elevation, azimuth):
+    # Square on, one view cannot tell the focal length: a typical webcam's is taken, and k1 fitted at it.
+    camera = ObliqueCamera(elevation, azimuth, k1=-0.3)
+    calibration = homography.fit("front", board_photo(camera, WHERE, seed=3), WHERE, 2.0, WORKSPACE)
+    assert calibration.lens.focal == pytest.approx(0.8 * camera.width)
+    assert located_off_cm(calibration, camera) < 1.0
+
+
 def test_cubes_at_the_workspaces_corners_are_found_within_1_cm_through_the_lens():
     camera = ObliqueCamera(76, 12, k1=-0.3)
     photo = board_photo(camera, WHERE, seed=1)
