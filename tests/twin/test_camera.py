@@ -136,7 +136,7 @@ def test_meshes_with_a_hull_are_drawn_as_their_hull_unless_asked_for_in_full(ful
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    camera = TwinCamera(TARGET, CameraArgs(full_meshes=full_meshes), LensArgs(noise=0.0))
+    camera = TwinCamera(TARGET, CameraArgs(width=320, height=240, full_meshes=full_meshes), LensArgs(noise=0.0))
     try:
         frame = camera.frame(model, data)
     finally:
@@ -229,8 +229,8 @@ def test_bad_camera_flags_are_one_line(args, says):
 
 
 def test_points_behind_or_beside_the_view_have_no_pixel():
-    camera = TwinCamera(TARGET, CameraArgs(), LensArgs())
+    camera = TwinCamera(TARGET, CameraArgs(width=320, height=240), LensArgs())
     behind = camera.position + (camera.position - np.array(TARGET))
     far_side = np.array([0.3, -3.0, 0.0])  # 3 m to the robot's right: outside a 60-degree view
     pixels = camera.project(np.array([TARGET, behind, far_side]))
-    assert np.allclose(pixels[0], (319.5, 239.5)) and np.isnan(pixels[1:]).all()
+    assert np.allclose(pixels[0], (159.5, 119.5)) and np.isnan(pixels[1:]).all()

@@ -7,8 +7,8 @@ import pytest
 
 from lerobot_contrast.twin.lens import Lens, LensArgs, LensError
 
-SIZE = (640, 480)
-FOCAL = 640.0
+SIZE = (320, 240)  # the model does not depend on the size; a small frame keeps the tests fast
+FOCAL = 320.0
 CLEAN = {"vignetting": 0.0, "gradient": 0.0, "noise": 0.0}
 
 
@@ -45,7 +45,7 @@ def test_points_land_where_opencv_projects_them(args):
     found = spot_centres(lens.apply(blobs(lens, rays)))
     assert len(found) == len(rays)
     pinhole = rays * FOCAL + (np.array(SIZE) - 1) / 2
-    assert np.abs(expected - pinhole).max() > 20  # the lens really moves the outer points
+    assert np.abs(expected - pinhole).max() > 10  # the lens really moves the outer points
     nearest = np.array([found[np.argmin(np.linalg.norm(found - point, axis=1))] for point in expected])
     assert np.abs(nearest - expected).max() < 0.1
 
@@ -71,8 +71,8 @@ def test_a_lens_that_folds_the_frame_is_refused(args):
 
 def test_the_render_must_be_the_canvas_size():
     lens = Lens(LensArgs(), FOCAL, SIZE)
-    with pytest.raises(ValueError, match=r"the render is 640x480, the lens needs \d+x\d+"):
-        lens.apply(np.zeros((480, 640, 3), np.uint8))
+    with pytest.raises(ValueError, match=r"the render is 320x240, the lens needs \d+x\d+"):
+        lens.apply(np.zeros((240, 320, 3), np.uint8))
 
 
 def flat_frame(args: LensArgs, level: int = 160) -> np.ndarray:
@@ -83,12 +83,12 @@ def flat_frame(args: LensArgs, level: int = 160) -> np.ndarray:
 
 def test_vignetting_darkens_the_corners_by_the_stated_fraction():
     frame = flat_frame(LensArgs(k1=0.0, vignetting=0.3, gradient=0.0, noise=0.0))
-    assert abs(frame[236:244, 316:324].mean() - 160) < 1.5
+    assert abs(frame[116:124, 156:164].mean() - 160) < 1.5
     assert abs(frame[:3, :3].mean() / 160 - 0.7) < 0.02 and abs(frame[-3:, -3:].mean() / 160 - 0.7) < 0.02
 
 
-@pytest.mark.parametrize(("angle", "lit", "far"), [(0.0, (slice(235, 245), slice(0, 5)), (slice(235, 245), slice(-5, None))),
-                                                  (90.0, (slice(0, 5), slice(315, 325)), (slice(-5, None), slice(315, 325)))])  # fmt: skip
+@pytest.mark.parametrize(("angle", "lit", "far"), [(0.0, (slice(115, 125), slice(0, 5)), (slice(115, 125), slice(-5, None))),
+                                                  (90.0, (slice(0, 5), slice(155, 165)), (slice(-5, None), slice(155, 165)))])  # fmt: skip
 def test_the_light_gradient_comes_from_the_stated_side(angle, lit, far):
     frame = flat_frame(LensArgs(k1=0.0, vignetting=0.0, gradient=0.4, gradient_deg=angle, noise=0.0))
     assert abs(frame[lit].mean() / frame[far].mean() - 1.2 / 0.8) < 0.04
