@@ -189,7 +189,10 @@ def _check_spread(calibration: CameraCalibration, table: np.ndarray, pixels: np.
     grid = np.array([[x, y] for x in np.linspace(x0, x1, 7) for y in np.linspace(y0, y1, 9)])
     seen = calibration.to_pixels(grid)
     width, height = calibration.image_size
-    inside = np.all((seen >= 0) & (seen <= (width - 1, height - 1)), axis=1)
+    # A homography also maps points behind the camera into the frame: those are on the other side from the board's.
+    depth = np.column_stack([np.vstack([grid, table[:1]]), np.ones(len(grid) + 1)]) @ calibration.homography[2]
+    ahead = np.sign(depth[:-1]) == np.sign(depth[-1])
+    inside = ahead & np.all((seen >= 0) & (seen <= (width - 1, height - 1)), axis=1)
     if not inside.any():
         raise CalibrationError(
             f"camera {calibration.camera}: the task's workspace is not in view; aim the camera at the table"

@@ -110,3 +110,12 @@ def test_the_lens_is_kept_in_the_calibration_file_and_version_1_files_still_load
     assert plain.lens is None
     expected = cv2.perspectiveTransform(GRID.reshape(-1, 1, 2), np.array(old["cameras"]["front"]["homography"]))
     assert np.allclose(plain.to_pixels(GRID), expected.reshape(-1, 2))
+
+
+def test_a_workspace_out_of_the_cameras_view_is_refused():
+    camera = ObliqueCamera(60, 200, k1=-0.3)
+    photo = board_photo(camera, WHERE, seed=2)
+    # Far to the robot's right, and behind the camera.
+    for elsewhere in (((0.15, -3.0), (0.45, -2.5)), ((-2.0, -0.25), (-1.5, 0.25))):
+        with pytest.raises(homography.CalibrationError, match="the task's workspace is not in view; aim the camera"):
+            homography.fit("front", photo, WHERE, 2.0, elsewhere)
