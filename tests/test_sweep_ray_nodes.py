@@ -179,6 +179,7 @@ def test_a_wrong_address_or_token_is_one_line_in_seconds(cluster):
     cases = [
         (f"ray://127.0.0.1:{closed}", cluster["env"], "no Ray cluster answers at 127.0.0.1:"),
         (f"127.0.0.1:{closed}", cluster["env"], "start one there with `ray start --head`"),
+        ("auto", {**cluster["env"], "RAY_TMPDIR": str(cluster["root"] / "wlocal")}, "no Ray runs on this machine"),
         (cluster["client"], no_token, "the Ray cluster needs a token and this machine has none; "),
         (cluster["gcs"], {**no_token, "RAY_AUTH_TOKEN": "wrong"}, "refused the token from RAY_AUTH_TOKEN"),
     ]
