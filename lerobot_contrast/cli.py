@@ -4,8 +4,8 @@ The core commands' scripts (`lerobot-contrast-eval`, `-report`, ...) call each m
 
 from __future__ import annotations
 
-import runpy
 import sys
+from importlib import import_module
 from importlib.util import find_spec
 
 from lerobot_contrast.contrast.errors import UserError
@@ -29,22 +29,21 @@ def require_extra(extra: str, command: str) -> None:
         )
 
 
-def _run_module(module: str, extra: str) -> int:
-    """Run `python -m module` once its extra is present; otherwise say which extra to install."""
+def _run_main(extra: str, command: str, module: str) -> int:
+    """Run `module.main()` once the extra is present; otherwise say which extra to install."""
     try:
-        require_extra(extra, f"python -m {module}")
+        require_extra(extra, command)
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    runpy.run_module(module, run_name="__main__", alter_sys=True)
-    return 0
+    return import_module(module).main()
 
 
 def sweep() -> int:
     """`lerobot-contrast-sweep`: `python -m lerobot_contrast.sweep`."""
-    return _run_module("lerobot_contrast.sweep", "sweep")
+    return _run_main("sweep", "python -m lerobot_contrast.sweep", "lerobot_contrast.sweep.command")
 
 
 def twin() -> int:
     """`lerobot-contrast-twin`: `python -m lerobot_contrast.twin`."""
-    return _run_module("lerobot_contrast.twin", "twin")
+    return _run_main("twin", "python -m lerobot_contrast.twin", "lerobot_contrast.twin.__main__")

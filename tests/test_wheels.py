@@ -12,7 +12,8 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.slow
+# One worker builds the wheels and the venv once for the whole module (pytest-xdist, --dist loadgroup).
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("wheels")]
 
 ROOT = Path(__file__).resolve().parents[1]
 SIBLINGS = ("protocols", "robots", "policies", "envs")
@@ -52,7 +53,7 @@ def core(tmp_path_factory, wheelhouse) -> dict:
     venv = tmp_path_factory.mktemp("core") / "venv"
     _run([sys.executable, "-m", "venv", venv]).check_returncode()
     _link_torch(venv)
-    pins = venv.parent / "pins.txt"  # this environment's versions: the same torch, and no new resolution to wait for
+    pins = venv.parent / "pins.txt"  # the versions this environment holds, as scripts/setup.sh --libero pins them
     frozen = _run([sys.executable, "-m", "pip", "freeze", "--exclude-editable"]).stdout.splitlines()
     pins.write_text("\n".join(line for line in frozen if " @ " not in line) + "\n")
     install = [venv / "bin/python", "-m", "pip", "install", "--disable-pip-version-check", "--no-compile", "-c", pins]
