@@ -28,6 +28,9 @@ POSITION_TOLERANCE = 0.001  # m
 MAX_STEP = 0.1  # rad per iteration and task, so a far target is approached along the way and not overshot
 MAX_TILT_DEG = 60.0  # jaws tilted further from vertical than this would sweep the table
 MAX_ACROSS_DEG = 20.0  # pads turned further than this from the faces push the object round instead of holding it
+# The gripper's body between the jaws ends 14 mm above the pads' middle: gripping a bit above a small object's
+# centre keeps it off the object's top.
+GRASP_ABOVE_CENTRE = 0.004
 HOVER = 0.06  # m above the grasp height on the way in and out
 CARRY_HEIGHT = 0.10  # m, the grasp point's height while carrying
 RELEASE_DROP = 0.004  # m between the carried object's underside and the table when it is let go
@@ -163,17 +166,19 @@ def headings(yaw: float) -> list[float]:
     return [yaw + k * math.pi / 2 for k in range(4)]
 
 
-def _best(model, point, target, yaw, seed) -> tuple[dict[str, float], float]:
-    """The reachable heading across the faces that turns the wrist least from `seed`."""
+def _best(model, point, grip, above, yaw, seed) -> tuple[dict[str, float], dict[str, float], float]:
+    """Grasp and hover poses for the heading across the faces, reachable at both heights, that turns the wrist
+    least from `seed`."""
     found = []
     for across in headings(yaw):
         try:
-            found.append((solve(model, point, target, across, seed), across))
+            at_grasp = solve(model, point, grip, across, seed)
+            found.append((at_grasp, solve(model, point, above, across, at_grasp), across))
         except Unreachable:
             continue
     if not found:
-        raise Unreachable(f"no top-down grasp of the object at ({target[0]:.3f}, {target[1]:.3f}) m is reachable")
-    return min(found, key=lambda pair: abs(pair[0]["wrist_roll"] - seed["wrist_roll"]))
+        raise Unreachable(f"no top-down grasp of the object at ({grip[0]:.3f}, {grip[1]:.3f}) m is reachable")
+    return min(found, key=lambda found: abs(found[0]["wrist_roll"] - seed["wrist_roll"]))
 
 
 def pick_and_place(
@@ -188,13 +193,12 @@ def pick_and_place(
     x, y, z, yaw = obj
     point = grasp_point(model, size)
     opened, closed = OPEN, jaw_angle(model, size) - SQUEEZE
-    above, grip = np.array([x, y, z + HOVER]), np.array([x, y, z])
-    at_grasp, across = _best(model, point, grip, yaw, start)
-    seed = dict(at_grasp)
+    grip = np.array([x, y, z + GRASP_ABOVE_CENTRE])
+    above = grip + [0.0, 0.0, HOVER]
+    at_grasp, hover, across = _best(model, point, grip, above, yaw, start)
     carry_at = np.array([target[0], target[1], CARRY_HEIGHT])
     release = np.array([target[0], target[1], size / 2 + RELEASE_DROP])
-    hover = solve(model, point, above, across, seed)
-    lift = solve(model, point, np.array([x, y, CARRY_HEIGHT]), across, seed)
+    lift = solve(model, point, np.array([x, y, CARRY_HEIGHT]), None, hover)
     # Once held, the object turns with the jaws: where they point across no longer matters.
     carried = solve(model, point, carry_at, None, lift)
     lowered = solve(model, point, release, None, carried)

@@ -53,6 +53,9 @@ JAW_PADS = ("fixed_jaw_pad", "moving_jaw_pad")
 BASE_LIFT = 0.0024
 # The model's servo gain (kp 17.8) leaves the shoulder a degree short under gravity; an STS3215 holds it closer.
 SERVO_KP = 100.0
+# LeRobot's so101_follower configures the gripper at half torque (Max_Torque_Limit 500 of 1000): squeezing harder than
+# that, a closed-to-the-stop command flicks a small cube out of the jaws.
+GRIPPER_TORQUE_SHARE = 0.5
 SPARE_GAP = 0.08  # m between the spare objects waiting past the storage row's end
 
 SpecEdit = Callable[[mujoco.MjSpec], None]
@@ -100,6 +103,7 @@ def build_spec(task: TaskSpec, scene: Scene | None = None, extras: Iterable[Spec
     spec.body("base").pos[2] += BASE_LIFT
     for name in arm.MOTOR_NAMES:
         spec.actuator(name).set_to_position(kp=SERVO_KP, dampratio=1.0)
+    spec.actuator(arm.GRIPPER).forcerange *= GRIPPER_TORQUE_SHARE
     for name in JAW_PADS:  # the model ships the fingertip pads inert; they are what holds a cube
         pad = spec.geom(name)
         pad.contype, pad.conaffinity, pad.friction, pad.condim = 1, 1, PAD_FRICTION, 4
