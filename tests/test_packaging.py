@@ -40,11 +40,11 @@ def test_the_core_leaves_ray_the_training_stack_and_the_test_tools_to_extras():
 
 
 def test_each_command_has_a_console_script_in_lerobots_style():
-    scripts = {ep.name: ep.value for ep in importlib.metadata.entry_points(group="console_scripts")}
+    scripts = {ep.name: ep for ep in importlib.metadata.entry_points(group="console_scripts")}
     for command in COMMANDS:
-        target = scripts[f"lerobot-contrast-{command}"]
-        assert target in (f"lerobot_contrast.{command}:main", f"lerobot_contrast.cli:{command}")
-        assert (Path(sys.executable).parent / f"lerobot-contrast-{command}").exists()
+        script = scripts[f"lerobot-contrast-{command}"]
+        assert script.value in (f"lerobot_contrast.{command}:main", f"lerobot_contrast.cli:{command}")
+        assert callable(script.load()) and (Path(sys.executable).parent / script.name).exists()
 
 
 def test_a_missing_extra_is_named_with_the_command_that_installs_it(monkeypatch):
