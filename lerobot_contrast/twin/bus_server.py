@@ -1,18 +1,22 @@
 """The Feetech serial bus of the twin, served on a pseudo-terminal: LeRobot's `FeetechMotorsBus` opens `/dev/pts/N` as it
 would the arm's USB adapter. Protocol 0: PING (broadcast too), READ, WRITE, SYNC_READ, SYNC_WRITE."""
 
+import multiprocessing
 import os
 import select
 import threading
 import time
 import tty
 
+from lerobot_contrast.twin.bus_process import SharedLink, SharedTable, publish, take_updates
 from lerobot_contrast.twin.faults import FaultInjector, FaultsConfig
 from lerobot_contrast.twin.servos import ServoBank
 
 BROADCAST_ID = 0xFE
 PING, READ, WRITE, SYNC_READ, SYNC_WRITE = 0x01, 0x02, 0x03, 0x82, 0x83
 MAX_LENGTH = 250  # the SDK's longest packet
+TICK_S = 0.005  # how often the bus process steps its servos and trades state with the twin
+START_TIMEOUT_S = 60
 
 
 def checksum(body: bytes) -> int:
@@ -51,19 +55,30 @@ def take_packets(buffer: bytearray) -> list[tuple[int, int, bytes]]:
 
 class BusServer:
     """Answers instruction packets for the servos of `bank`. With `clocked`, the bank is advanced by the wall-clock time
-    before each packet (no physics running); otherwise whatever steps the physics steps the bank."""
+    before each packet (no physics running); otherwise whatever steps the physics steps the bank.
 
-    def __init__(self, bank: ServoBank, faults: FaultsConfig | None = None, clocked: bool = False):
+    With `process` (the default when not `clocked`), the bus is served from a process of its own, holding a copy of
+    the servos that steps in real time: its replies then meet LeRobot's 50 ms deadline however busy the physics and
+    camera threads keep this interpreter (in one process, 9 connects in 10 failed on a loaded 2-core machine). The
+    bank here then mirrors those servos at each `step` and passes its measurements and register writes on."""
+
+    def __init__(self, bank: ServoBank, faults: FaultsConfig | None = None, clocked: bool = False,
+                 process: bool | None = None):  # fmt: skip
         self.bank = bank
         self.faults = FaultInjector(faults)
         self.clocked = clocked
+        self.process = not clocked if process is None else process
         self.port: str | None = None
         self._thread: threading.Thread | None = None
         self._fds: list[int] = []
         self._last_step = time.monotonic()
+        self._child = None
 
     def start(self) -> str:
-        """Open the pseudo-terminal and serve it on a daemon thread; returns the port to give LeRobot."""
+        """Open the pseudo-terminal and serve it (on a daemon thread, or in a process); returns the port to give
+        LeRobot."""
+        if self.process:
+            return self._start_process()
         master, slave = os.openpty()
         tty.setraw(slave)  # no echo, no line editing: bytes pass as on a serial line
         wake_read, wake_write = os.pipe()
@@ -75,6 +90,12 @@ class BusServer:
         return self.port
 
     def stop(self) -> None:
+        if self._child is not None:
+            child, table, stopping = self._child
+            stopping.set()
+            child.join(timeout=5)
+            self.bank.link, self._child = None, None
+            table.close()
         if self._thread is None:
             return
         os.write(self._fds[3], b"x")
@@ -88,6 +109,33 @@ class BusServer:
 
     def __exit__(self, *exc) -> None:
         self.stop()
+
+    def _start_process(self) -> str:
+        spawn = multiprocessing.get_context("spawn")  # not fork: the twin's other threads hold locks and sockets
+        table, writes, ports, stopping = SharedTable(self.bank.ids), spawn.Queue(), spawn.Queue(), spawn.Event()
+        publish(self.bank, table)
+        child = spawn.Process(
+            target=_serve_process,
+            args=(self.bank, self.faults.config, table.memory.name, writes, ports, stopping),
+            name="twin-bus",
+            daemon=True,
+        )
+        child.start()
+        self._child = (child, table, stopping)
+        try:
+            self.port = ports.get(timeout=START_TIMEOUT_S)
+        except Exception:
+            self.stop()
+            raise RuntimeError("the twin's bus process did not start") from None
+        self.bank.link = SharedLink(table, writes)
+        return self.port
+
+    def advance(self) -> None:
+        """Step the servos by the wall-clock time since the last step (clocked)."""
+        with self.bank.lock:
+            now = time.monotonic()
+            self.bank.step(now - self._last_step)
+            self._last_step = now
 
     def _serve(self) -> None:
         master, _, wake, _ = self._fds
@@ -109,9 +157,7 @@ class BusServer:
         """The bytes the bus sends back for one instruction packet (status packets, after faults); with `reply`
         False the servos act on it but stay silent."""
         if self.clocked:
-            now = time.monotonic()
-            self.bank.step(now - self._last_step)
-            self._last_step = now
+            self.advance()
         packets = self._status_packets(servo_id, instruction, params)
         if not packets or not reply:
             return b""
@@ -141,3 +187,19 @@ class BusServer:
                 if params[offset] in bank.ids:
                     bank.bus_write(params[offset], addr, params[offset + 1 : offset + 1 + length])
         return []
+
+
+def _serve_process(bank: ServoBank, faults: FaultsConfig, table_name: str, writes, ports, stopping) -> None:
+    """The bus process: serve the bank's copy, clocked, trading state with the twin every TICK_S."""
+    table = SharedTable(bank.ids, table_name)
+    server = BusServer(bank, faults, clocked=True, process=False)
+    ports.put(server.start())
+    try:
+        while not stopping.wait(TICK_S):
+            with bank.lock:
+                take_updates(bank, table, writes)
+                server.advance()
+                publish(bank, table)
+    finally:
+        server.stop()
+        table.close()

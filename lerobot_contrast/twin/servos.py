@@ -6,6 +6,7 @@ Positions here ("raw") are in the register frame LeRobot reads: Present_Position
 import math
 import threading
 from dataclasses import dataclass
+from typing import Protocol
 
 from lerobot_contrast.twin.control_table import ControlTable
 
@@ -25,6 +26,14 @@ class _Servo:
     present: float  # encoder frame
     velocity: float = 0.0  # steps/s, of the setpoint
     measured: bool = False  # True once physics reports present positions
+
+
+class Link(Protocol):
+    """Where a bank whose servos run in another process (the bus process) sends what happens here."""
+
+    def pull(self, bank: "ServoBank") -> None: ...  # copy the servos' setpoints, torque and presents here
+    def present(self, servo_id: int, raw: float) -> None: ...  # a measurement for the servo
+    def write(self, servo_id: int, addr: int, data: bytes) -> None: ...  # a register write for the servo
 
 
 class Memory:
@@ -57,6 +66,7 @@ class ServoBank:
         if set(initial_raw) != set(motors):
             raise ValueError(f"initial_raw names {sorted(initial_raw)} differ from the motors {sorted(motors)}")
         self.lock = threading.RLock()
+        self.link: Link | None = None  # set while the servos run in the bus process (bus_process.py)
         self.names = {servo_id: name for name, (servo_id, _) in motors.items()}
         if len(self.names) != len(motors):
             raise ValueError(f"two motors share an id: {motors}")
@@ -93,6 +103,8 @@ class ServoBank:
             servo.present = raw + servo.table.get("Homing_Offset")
             servo.measured = True
             self._publish(servo)
+            if self.link is not None:
+                self.link.present(servo.table.get("ID"), raw)
 
     def present(self, name: str) -> float:
         with self.lock:
@@ -104,7 +116,11 @@ class ServoBank:
             return bool(self._named(name).table.get("Torque_Enable"))
 
     def step(self, dt: float) -> None:
-        """Advance every servo's controller by dt seconds."""
+        """Advance every servo's controller by dt seconds (linked to a bus process, where they step in real time:
+        take their state from there)."""
+        if self.link is not None:
+            self.link.pull(self)
+            return
         with self.lock:
             for servo in self._servos.values():
                 if servo.table.get("Torque_Enable"):
@@ -122,6 +138,8 @@ class ServoBank:
     def bus_write(self, servo_id: int, addr: int, data: bytes) -> None:
         """A WRITE from the bus, with its side effects: enabling torque holds the joint where it is."""
         with self.lock:
+            if self.link is not None:
+                self.link.write(servo_id, addr, data)
             servo = self._servo(servo_id)
             torque_was = servo.table.get("Torque_Enable")
             touched = servo.table.write_bytes(addr, data)
@@ -129,6 +147,24 @@ class ServoBank:
                 servo.setpoint, servo.velocity = servo.present, 0.0
                 servo.table.set("Goal_Position", round(servo.present - servo.table.get("Homing_Offset")))
             self._publish(servo)
+
+    def mirror(self, servo_id: int, setpoint: float, present: float, torque: bool) -> None:
+        """Take a linked servo's state (raw) as the bus process reports it."""
+        with self.lock:
+            servo = self._servo(servo_id)
+            offset = servo.table.get("Homing_Offset")
+            servo.setpoint, servo.present = setpoint + offset, present + offset
+            servo.table.set("Torque_Enable", int(torque))
+            self._publish(servo)
+
+    def __getstate__(self) -> dict:
+        state = {**self.__dict__, "link": None}
+        del state["lock"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self.lock = threading.RLock()
 
     def _servo(self, servo_id: int) -> _Servo:
         if servo_id not in self._servos:
