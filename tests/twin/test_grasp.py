@@ -1,0 +1,61 @@
+"""Grasping works on the twin: through joint goals alone (Goal_Position registers, as LeRobot writes them), from
+inverse kinematics, the arm picks the red cube from the play area and puts it in a bin, as the true scene shows."""
+
+import math
+
+import pytest
+
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.domains.task_file import load_task_file
+from lerobot_contrast.twin import arm, reach
+from lerobot_contrast.twin.physics import Physics
+from lerobot_contrast.twin.scene import build_spec
+from lerobot_contrast.twin.servos import ServoBank
+
+
+@pytest.fixture(scope="module")
+def blocks():
+    return load_task_file("so101_blocks").spec
+
+
+def bench(task, red: Pose) -> Physics:
+    scene = Scene({"red_cube": red, "green_cube": Pose(0.22, -0.07), "blue_cube": Pose(0.21, 0.08)})
+    bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
+    physics = Physics(build_spec(task, scene), bank, task.objects)
+    for servo_id in bank.ids:
+        bank.memory(servo_id).write("Torque_Enable", 1)
+    return physics
+
+
+@pytest.mark.parametrize(
+    ("red", "bin_name"), [(Pose(0.27, 0.04, 0.5), "left_bin"), (Pose(0.36, -0.02, -2.0), "right_bin")]
+)
+def test_the_arm_puts_the_red_cube_in_a_bin(blocks, red, bin_name):
+    physics = bench(blocks, red)
+    region = blocks.workspace.regions[bin_name]
+    x, y, z, _ = reach.carry(physics, "red_cube", region.center)
+    assert region.contains(x, y)
+    assert z == pytest.approx(0.015, abs=0.002)  # on the table inside the walls, not perched on one
+    others = physics.poses()
+    assert others["green_cube"][:2] == pytest.approx((0.22, -0.07), abs=0.002)  # nothing else knocked about
+    assert others["blue_cube"][:2] == pytest.approx((0.21, 0.08), abs=0.002)
+    rest = {n: arm.to_angle(n, physics.bank.present(n)) for n in arm.MOTOR_NAMES}
+    assert all(abs(rest[n] - arm.REST[n]) < math.radians(3) for n in arm.MOTOR_NAMES)  # back at rest
+
+
+def test_waypoints_grip_across_the_faces_and_lift_clear(blocks):
+    physics = bench(blocks, Pose(0.25, 0.0, 0.3))
+    start = {n: arm.to_angle(n, physics.bank.present(n)) for n in arm.MOTOR_NAMES}
+    plan = reach.pick_and_place(physics.model, start, physics.poses()["red_cube"], 0.03, (0.3, 0.18))
+    steps = {waypoint.label: waypoint for waypoint in plan}
+    assert list(steps) == ["open", "descend", "close", "lift", "carry", "lower", "release", "retreat", "rest"]
+    assert steps["close"].goals[arm.GRIPPER] < reach.jaw_angle(physics.model, 0.03) < steps["open"].goals[arm.GRIPPER]
+    reach.follow(physics, plan[:4])
+    assert physics.poses()["red_cube"][2] > 0.06  # held up in the air by the jaws
+
+
+def test_a_target_beyond_reach_is_refused_not_attempted(blocks):
+    physics = bench(blocks, Pose(0.25, 0.0))
+    start = {n: arm.to_angle(n, physics.bank.present(n)) for n in arm.MOTOR_NAMES}
+    with pytest.raises(reach.Unreachable, match="cannot reach"):
+        reach.pick_and_place(physics.model, start, physics.poses()["red_cube"], 0.03, (0.9, 0.0))
