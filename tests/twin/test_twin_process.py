@@ -1,0 +1,158 @@
+"""The twin as a user runs it: one command starts it and prints the flags for eval, LeRobot's own SO101Follower
+connects with them, objects are placed by command (bad requests get one line), and SIGTERM stops it cleanly."""
+
+import json
+import math
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+
+import pytest
+
+from lerobot_contrast.domains.task_file import load_task_file
+from lerobot_contrast.twin import arm
+from lerobot_contrast.twin.physics import Physics
+from lerobot_contrast.twin.placement import PlacementServer, request
+from lerobot_contrast.twin.scene import build_spec
+from lerobot_contrast.twin.servos import ServoBank
+
+STARTUP_S = 90  # a loaded 2-core CI machine imports LeRobot and compiles the model in well under this
+
+
+@pytest.fixture(scope="module")
+def placement():
+    task = load_task_file("so101_blocks").spec
+    physics = Physics(build_spec(task), ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits()), task.objects)
+    return PlacementServer(physics, task, port=free_port())
+
+
+def answer(server: PlacementServer, message) -> dict:
+    return server.answer(message if isinstance(message, bytes) else json.dumps(message).encode())
+
+
+@pytest.mark.parametrize(
+    ("message", "error"),
+    [
+        (b"put it there", r"^malformed request: send one JSON object"),
+        ([1, 2], r"^malformed request"),
+        ({"cmd": "teleport"}, r"^unknown command 'teleport' in \"cmd\"; use one of: place, scene, board"),
+        ({"cmd": "place", "object": "purple_cube", "x": 0.3, "y": 0.0}, r"^unknown object 'purple_cube'; .* red_cube"),
+        ({"cmd": "place", "object": "red_cube", "x": 30, "y": 10}, r"^\(30.000, 10.000\) m is off the table.*metres"),
+        ({"cmd": "place", "object": "red_cube", "x": "0.3", "y": 0.0}, r"^place: 'x' must be a finite number"),
+        ({"cmd": "place", "object": "red_cube", "x": 0.3, "y": math.inf}, r"^place: 'y' must be a finite number"),
+        ({"cmd": "board", "x": 0.3, "y": 0.0}, r"^board: 'yaw_deg' must be a finite number, got None"),
+    ],
+)
+def test_bad_requests_get_one_line(placement, message, error):
+    reply = answer(placement, message)
+    assert reply["ok"] is False and "\n" not in reply["error"]
+    assert re.search(error, reply["error"])
+
+
+def test_place_then_scene_reports_the_true_pose(placement):
+    assert answer(placement, {"cmd": "place", "object": "red_cube", "x": 0.31, "y": -0.05, "yaw": 0.4}) == {"ok": True}
+    placement.physics.run(0.3)
+    scene = answer(placement, {"cmd": "scene"})
+    assert scene["objects"]["red_cube"] == pytest.approx([0.31, -0.05, 0.4], abs=0.001)
+    assert scene["z"]["red_cube"] == pytest.approx(0.015, abs=0.001)
+
+
+def test_the_board_is_laid_and_removed_without_moving_anything(placement):
+    physics = placement.physics
+    before = physics.poses()
+    assert answer(placement, {"cmd": "board", "x": 0.3, "y": 0.0, "yaw_deg": 10}) == {"ok": True}
+    assert physics.model.geom("calibration_board").size[2] > 0 and physics.version == 1
+    for name, pose in physics.poses().items():
+        assert pose == pytest.approx(before[name])
+    assert answer(placement, {"cmd": "remove_board"}) == {"ok": True, "removed": True}
+    assert answer(placement, {"cmd": "remove_board"}) == {"ok": True, "removed": False}
+
+
+def test_reset_arm_puts_it_at_rest(placement):
+    physics = placement.physics
+    physics.bank.memory(arm.MOTORS["shoulder_pan"][0]).write("Torque_Enable", 1)
+    physics.bank.memory(arm.MOTORS["shoulder_pan"][0]).write("Goal_Position", 2600)
+    physics.run(1.0)
+    assert answer(placement, {"cmd": "reset_arm"}) == {"ok": True}
+    physics.run(0.5)
+    for name in arm.MOTOR_NAMES:
+        assert arm.to_angle(name, physics.bank.present(name)) == pytest.approx(arm.REST[name], abs=math.radians(1))
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def twin_command(*flags: str) -> list[str]:
+    return [sys.executable, "-m", "lerobot_contrast.twin", *flags]
+
+
+def run_twin(*flags: str) -> subprocess.CompletedProcess:
+    return subprocess.run(twin_command(*flags), capture_output=True, text=True, timeout=STARTUP_S)
+
+
+@pytest.mark.parametrize(
+    ("flags", "error"),
+    [
+        (["--task=no_such_task"], "error: --task: 'no_such_task' is neither a task file path nor one of:"),
+        (["--camera_prot=5555"], "error: unknown flag --camera_prot; did you mean --camera_port?"),
+        (["--lens_k1=wide"], "error: --lens_k1:"),
+    ],
+)
+def test_bad_flags_are_one_line(flags, error):
+    done = run_twin(*flags)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.startswith(error) and done.stderr.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_one_command_starts_a_bench_lerobot_connects_to_and_sigterm_stops(tmp_path):
+    from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
+
+    camera_port, control_port = free_port(), free_port()
+    flags = [f"--calibration_dir={tmp_path}", f"--camera_port={camera_port}", f"--control_port={control_port}",
+             "--width=160", "--height=120", "--fps=5"]  # fmt: skip
+    twin = subprocess.Popen(twin_command(*flags), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        lines = [twin.stdout.readline() for _ in range(5)]
+        assert [line.split(":")[0] for line in lines] == ["bus", "camera", "placement", "calibration", "eval flags"]
+        port = lines[0].split()[1]
+        assert f"--robot.port={port} --robot.id=twin --robot.calibration_dir={tmp_path}" in lines[4]
+        assert f"port: {camera_port}" in lines[4] and "type: zmq" in lines[4]
+        assert (tmp_path / "twin.json").is_file()
+        busy = run_twin(
+            f"--control_port={control_port}", f"--camera_port={free_port()}", f"--calibration_dir={tmp_path}"
+        )
+        assert busy.returncode == 2 and busy.stderr.startswith(f"error: control port {control_port} on 127.0.0.1:")
+
+        robot = SO101Follower(SO101FollowerConfig(port=port, id="twin", calibration_dir=tmp_path))
+        robot.connect(calibrate=False)
+        try:
+            assert robot.is_calibrated
+            observed = robot.get_observation()
+        finally:
+            robot.disconnect()
+        for name in arm.MOTOR_NAMES:
+            assert observed[f"{name}.pos"] == pytest.approx(arm.to_lerobot(name, arm.REST[name]), abs=2.0)
+
+        place = [sys.executable, "-m", "lerobot_contrast.twin.place", f"--control_port={control_port}"]
+        placed = subprocess.run([*place, "green_cube", "0.25", "0.0", "30"], capture_output=True, text=True, timeout=60)
+        assert placed.stdout == "placed green_cube at x=0.250 y=0.000 m, yaw 30 deg\n"
+        wrong = subprocess.run([*place, "green_cube", "30", "10"], capture_output=True, text=True, timeout=60)
+        assert wrong.returncode == 1 and wrong.stderr.startswith("error: (30.000, 10.000) m is off the table")
+        assert request({"cmd": "scene"}, control_port)["objects"]["green_cube"] == pytest.approx(
+            [0.25, 0.0, 0.5236], abs=0.002
+        )
+    finally:
+        twin.send_signal(signal.SIGTERM)
+        _, stderr = twin.communicate(timeout=30)
+    assert twin.returncode == 0, stderr
+    assert stderr.strip().endswith("twin stopped")
+    assert not os.path.exists(port)  # the pseudo-terminal went with it
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", control_port))  # and so did its sockets
