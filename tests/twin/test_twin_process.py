@@ -9,6 +9,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -19,6 +20,8 @@ from lerobot_contrast.twin.placement import PlacementServer, request
 from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
 
+POSE = {"shoulder_pan.pos": 20.0, "shoulder_lift.pos": -30.0, "elbow_flex.pos": 40.0, "wrist_flex.pos": 60.0,
+        "wrist_roll.pos": 15.0, "gripper.pos": 40.0}  # fmt: skip
 STARTUP_S = 90  # a loaded 2-core CI machine imports LeRobot and compiles the model in well under this
 
 
@@ -135,10 +138,15 @@ def test_one_command_starts_a_bench_lerobot_connects_to_and_sigterm_stops(tmp_pa
         try:
             assert robot.is_calibrated
             observed = robot.get_observation()
+            for name in arm.MOTOR_NAMES:
+                assert observed[f"{name}.pos"] == pytest.approx(arm.to_lerobot(name, arm.REST[name]), abs=2.0)
+            robot.send_action(POSE)
+            time.sleep(1.5)  # the twin runs in real time: servos at finite speed, the physics behind them
+            reached = robot.get_observation()
         finally:
             robot.disconnect()
-        for name in arm.MOTOR_NAMES:
-            assert observed[f"{name}.pos"] == pytest.approx(arm.to_lerobot(name, arm.REST[name]), abs=2.0)
+        for key, value in POSE.items():
+            assert reached[key] == pytest.approx(value, abs=2.0)
 
         place = [sys.executable, "-m", "lerobot_contrast.twin.place", f"--control_port={control_port}"]
         placed = subprocess.run([*place, "green_cube", "0.25", "0.0", "30"], capture_output=True, text=True, timeout=60)
