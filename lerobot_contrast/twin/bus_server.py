@@ -17,6 +17,7 @@ PING, READ, WRITE, SYNC_READ, SYNC_WRITE = 0x01, 0x02, 0x03, 0x82, 0x83
 MAX_LENGTH = 250  # the SDK's longest packet
 TICK_S = 0.005  # how often the bus process steps its servos and trades state with the twin
 START_TIMEOUT_S = 60
+SILENT_S = 60  # how long the port stays open, answering nothing, after the twin dies
 
 
 def checksum(body: bytes) -> int:
@@ -73,6 +74,7 @@ class BusServer:
         self._fds: list[int] = []
         self._last_step = time.monotonic()
         self._child = None
+        self.silent = False  # the servos have no power: instruction packets get no reply
 
     def start(self) -> str:
         """Open the pseudo-terminal and serve it (on a daemon thread, or in a process); returns the port to give
@@ -159,7 +161,7 @@ class BusServer:
         if self.clocked:
             self.advance()
         packets = self._status_packets(servo_id, instruction, params)
-        if not packets or not reply:
+        if not packets or not reply or self.silent:
             return b""
         moving = any(self.bank.memory(i).read("Moving") for i in self.bank.ids)
         return b"".join(self.faults.apply(packet, moving) for packet in packets)
@@ -194,8 +196,13 @@ def _serve_process(bank: ServoBank, faults: FaultsConfig, table_name: str, write
     table = SharedTable(bank.ids, table_name)
     server = BusServer(bank, faults, clocked=True, process=False)
     ports.put(server.start())
+    twin = os.getppid()
     try:
         while not stopping.wait(TICK_S):
+            if os.getppid() != twin:  # the twin was killed: its arm lost power, the USB adapter is still plugged in
+                server.silent = True
+                stopping.wait(SILENT_S)
+                return
             with bank.lock:
                 take_updates(bank, table, writes)
                 server.advance()
