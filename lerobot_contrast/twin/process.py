@@ -51,6 +51,7 @@ class Twin:
 
     def __init__(self, config: TwinConfig, camera: bool = True) -> None:
         from lerobot_contrast.twin import arm  # MuJoCo loads here, after the caller chose its GL backend
+        from lerobot_contrast.twin.camera import view_hulls
         from lerobot_contrast.twin.physics import Physics
         from lerobot_contrast.twin.scene import build_spec
         from lerobot_contrast.twin.servos import ServoBank
@@ -59,9 +60,12 @@ class Twin:
         self.task = load_task_file(config.task).spec
         scene = sample_scene(self.task, np.random.default_rng(config.seed))
         self.bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
-        self.physics = Physics(build_spec(self.task, scene), self.bank, self.task.objects)
+        # The camera draws the arm's meshes as light hulls (a third of the render time); contacts are unchanged.
+        spec = build_spec(self.task, scene, extras=[view_hulls] if camera else [])
+        self.physics = Physics(spec, self.bank, self.task.objects)
         self.with_camera = camera
         self.endpoints: dict[str, str] = {}
+        self.cameras_flag = ""
         self._running: list = []
 
     def start(self) -> dict[str, str]:
@@ -92,23 +96,19 @@ class Twin:
         return self.endpoints
 
     def _start_camera(self) -> str:
-        from lerobot_contrast.twin.camera import CameraArgs, TwinCamera
-        from lerobot_contrast.twin.camera_server import CameraServer
+        from lerobot_contrast.twin.camera import CameraArgs
+        from lerobot_contrast.twin.camera_server import robot_cameras, serve_camera
         from lerobot_contrast.twin.lens import LensArgs
 
         config = self.config
         (x0, x1), (y0, y1) = self.task.workspace.area.box
+        args = CameraArgs(config.width, config.height)
         lens = LensArgs(k1=config.lens_k1, seed=config.seed)
-        camera = TwinCamera(((x0 + x1) / 2, (y0 + y1) / 2, 0.0), CameraArgs(config.width, config.height), lens)
-
-        def render() -> np.ndarray:
-            self.physics.read(camera.capture)
-            return camera.develop()
-
-        server = CameraServer(render, CAMERA_NAME, config.camera_port, config.fps, close=camera.close)
-        address = server.start()
+        target = ((x0 + x1) / 2, (y0 + y1) / 2, 0.0)
+        server = serve_camera(self.physics.read, target, args, lens, CAMERA_NAME, config.camera_port, config.fps)
         self._running.append(server)
-        return address
+        self.cameras_flag = robot_cameras(server, args)
+        return server.address
 
     def stop(self) -> None:
         while self._running:
@@ -125,9 +125,5 @@ class Twin:
         if config.calibration_dir is not None:
             flags.append(f"--robot.calibration_dir={config.calibration_dir}")
         if "camera" in self.endpoints:
-            camera = (
-                f"{{{CAMERA_NAME}: {{type: zmq, server_address: 127.0.0.1, port: {config.camera_port}, "
-                f"camera_name: {CAMERA_NAME}, width: {config.width}, height: {config.height}, fps: {config.fps}}}}}"
-            )
-            flags.append(f"--robot.cameras='{camera}'")
+            flags.append(f"--robot.cameras='{self.cameras_flag}'")
         return " ".join(flags)
