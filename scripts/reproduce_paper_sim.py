@@ -4,7 +4,7 @@ Design, as in the paper: for each of 3 seeds, an evaluation set of 250 i.i.d. in
 task families, evaluated by the standard strategy (the full i.i.d. evaluation), limited intervention, and the
 contrast strategy with ΔLB1+ΔLB2 (language only), ΔSB1+ΔSB2 (scene only) and all four. Cost: metres blocks are
 moved; metric: SPL. The study is the sweep file
-scripts/paper_sim.yaml, run by the sweep engine (lerobot_contrast.sweep, on Ray): one run directory per
+lerobot_contrast/sweep/studies/paper_sim.yaml, run by the sweep engine (lerobot_contrast.sweep, on Ray): one run directory per
 (strategy, seed), as many at once as the machine has cores; an episode several designs of a seed stage (the
 originals) runs once and is shared between their cells (share_episodes), their journals unchanged.
 
@@ -23,7 +23,7 @@ The analysis gives, beside the paper's figures: the standard evaluation's cost, 
 the absolute SPL error at that cost per strategy, SPL per perturbation with intervals paired against each base's
 original, and a verdict on each of the paper's four simulation findings, computed from those numbers.
 
-Usage: python scripts/reproduce_paper_sim.py [--sweep scripts/paper_sim.yaml] [--output_dir outputs/paper_sim]
+Usage: python scripts/reproduce_paper_sim.py [--sweep lerobot_contrast/sweep/studies/paper_sim.yaml] [--output_dir outputs/paper_sim]
        [--seeds 0 1 2] [--n_instances 250] [--max_episode_steps 200] [--num_cpus N] [--ray_address auto]
 (--seeds, --n_instances and --max_episode_steps override the sweep file's.)
 Writes OUTPUT_DIR/runs/<strategy>,seed=<k>/ (re-running the script resumes or skips them), OUTPUT_DIR/runs/
@@ -45,11 +45,11 @@ import numpy as np
 from rich.console import Console
 
 from lerobot_contrast.policies.base import DEFAULT_POLICY
-from lerobot_contrast.sweep.cells import flatten, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import flatten, read_sweep_file, studies_dir, sweep_cells
 from lerobot_contrast.sweep.command import SweepConfig, execute
 from lerobot_contrast.sweep.ray_pool import RayArgs
 
-SWEEP = Path(__file__).with_name("paper_sim.yaml")
+SWEEP = studies_dir() / "paper_sim.yaml"
 # The paper's Section 5 and appendix: trials at the standard evaluation's cost, and what it found on estimation.
 PAPER = {
     "standard": ("250", "reference"),

@@ -4,7 +4,7 @@ apartment, with the learned default navigator (vln_navigator).
 Two designs, both run by the sweep engine (lerobot_contrast.sweep):
 - the paper's exact design: its five participant arrangements (--task=vln_paper) x (original + ΔL, ΔLB, ΔS, ΔSB)
   x 3 repeats = 75 trials, metric progress to two subgoals, cost metres of furniture moved;
-- the same design at scale (scripts/paper_vln.yaml): 3 seeds x 100 sampled arrangements (--task=vln), standard
+- the same design at scale (lerobot_contrast/sweep/studies/paper_vln.yaml): 3 seeds x 100 sampled arrangements (--task=vln), standard
   against contrast (all four, and each axis pair), cost as metres and, for standard and all four, as reset seconds.
   Each axis pair is the all-four run kept to its originals and that pair's trials, every trial charged what staging
   it costs from the scene the previous kept trial left: the pairs are then the very perturbations the all-four set
@@ -30,11 +30,11 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 
-from lerobot_contrast.sweep.cells import flatten, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import flatten, read_sweep_file, studies_dir, sweep_cells
 from lerobot_contrast.sweep.command import SweepConfig, execute
 from lerobot_contrast.sweep.ray_pool import RayArgs
 
-SWEEP = Path(__file__).with_name("paper_vln.yaml")
+SWEEP = studies_dir() / "paper_vln.yaml"
 PERTURBATIONS = ("L", "LB", "S", "SB")
 # The paper's navigation figures (Section 6.2 and appendix C).
 PAPER_STANDARD_COST_PER_INSTANCE_M = 8.8

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import lerobot_contrast
-from lerobot_contrast import cli
+from lerobot_contrast import extras
 from lerobot_contrast.contrast.errors import UserError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -24,6 +24,7 @@ DISTRIBUTIONS = (
     "lerobot_env_language_table",
 )
 COMMANDS = ("eval", "report", "review", "publish", "calibrate", "sweep", "twin")
+MAINS = {"sweep": "lerobot_contrast.sweep.command:main", "twin": "lerobot_contrast.twin.__main__:main"}
 
 
 def test_every_distribution_is_installed_under_its_underscore_name_at_the_one_version():
@@ -43,15 +44,15 @@ def test_each_command_has_a_console_script_in_lerobots_style():
     scripts = {ep.name: ep for ep in importlib.metadata.entry_points(group="console_scripts")}
     for command in COMMANDS:
         script = scripts[f"lerobot-contrast-{command}"]
-        assert script.value in (f"lerobot_contrast.{command}:main", f"lerobot_contrast.cli:{command}")
+        assert script.value == MAINS.get(command, f"lerobot_contrast.{command}:main")
         assert callable(script.load()) and (Path(sys.executable).parent / script.name).exists()
 
 
 def test_a_missing_extra_is_named_with_the_command_that_installs_it(monkeypatch):
-    cli.require_extra("sweep", "sweep")  # ray is in this environment (the dev extra)
-    monkeypatch.setattr(cli, "find_spec", lambda name: None if name == "ray" else object())
+    extras.require_extra("sweep", "sweep")  # ray is in this environment (the dev extra)
+    monkeypatch.setattr(extras, "find_spec", lambda name: None if name == "ray" else object())
     with pytest.raises(UserError, match=r"^sweep needs the \[sweep\] extra \(ray not installed\): pip install"):
-        cli.require_extra("sweep", "sweep")
+        extras.require_extra("sweep", "sweep")
 
 
 def test_the_env_plugins_modules_import_one_way():

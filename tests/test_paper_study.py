@@ -1,8 +1,8 @@
-"""The paper's study (scripts/paper_sim.yaml, analysed by scripts/reproduce_paper_sim.py) stays runnable: its sweep
-file expands into valid simulated cells of the learned default, and every design the analysis reads is in it."""
+"""The paper's study (the shipped sweep file paper_sim, analysed by scripts/reproduce_paper_sim.py) stays runnable:
+its sweep file expands into valid simulated cells of the learned default, and every design the analysis reads is in it."""
 
-from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
-from tests.study_scripts import SCRIPTS, load_script
+from lerobot_contrast.sweep.cells import read_sweep_file, studies_dir, sweep_cells
+from tests.study_scripts import load_script
 
 
 def analysis_module():
@@ -10,7 +10,7 @@ def analysis_module():
 
 
 def test_the_study_is_five_designs_and_an_oracle_calibration_over_three_seeds_of_the_learned_default(tmp_path):
-    path = SCRIPTS / "paper_sim.yaml"
+    path = studies_dir() / "paper_sim.yaml"
     cells = sweep_cells(path, read_sweep_file(path), tmp_path)
     assert len(cells) == 7 * 3 and len({cell.name for cell in cells}) == len(cells)
     assert {cell.config.seed for cell in cells} == {0, 1, 2}
@@ -22,7 +22,7 @@ def test_the_study_is_five_designs_and_an_oracle_calibration_over_three_seeds_of
 
 
 def test_every_design_the_analysis_reads_is_a_cell_of_the_study(tmp_path):
-    path = SCRIPTS / "paper_sim.yaml"
+    path = studies_dir() / "paper_sim.yaml"
     labels = {cell.label for cell in sweep_cells(path, read_sweep_file(path), tmp_path)}
     study = analysis_module()
     assert {*study.PAPER, *study.CALIBRATION, "standard", "oracle_standard"} <= labels

@@ -1,4 +1,4 @@
-"""The paper's navigation study (scripts/paper_vln.yaml, run and analysed by scripts/reproduce_paper_vln.py): its
+"""The paper's navigation study (the shipped sweep file paper_vln, run and analysed by scripts/reproduce_paper_vln.py): its
 sweep file expands into the designs the analysis reads, its verdicts follow the numbers, and a tiny run writes the
 whole report."""
 
@@ -9,8 +9,8 @@ import ray
 
 from lerobot_contrast.reporting import load_run
 from lerobot_contrast.reporting.stats import Estimate
-from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
-from tests.study_scripts import SCRIPTS, load_script
+from lerobot_contrast.sweep.cells import read_sweep_file, studies_dir, sweep_cells
+from tests.study_scripts import load_script
 
 
 def study_module():
@@ -18,7 +18,7 @@ def study_module():
 
 
 def test_the_scaled_study_is_three_seeds_of_100_sampled_arrangements_and_holds_every_design_it_analyses(tmp_path):
-    path = SCRIPTS / "paper_vln.yaml"
+    path = studies_dir() / "paper_vln.yaml"
     cells = sweep_cells(path, read_sweep_file(path), tmp_path)
     assert {cell.config.seed for cell in cells} == {0, 1, 2}
     assert all(cell.config.task == "vln" and cell.config.n_instances == 100 for cell in cells)

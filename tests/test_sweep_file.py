@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from lerobot_contrast.sweep.cells import cell_name, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import cell_name, read_sweep_file, studies_dir, sweep_cells, sweep_file_path
 from lerobot_contrast.sweep.command import main
 
 SMALL = {
@@ -118,3 +118,13 @@ def test_a_gpu_share_ray_cannot_give_is_refused_in_one_line(tmp_path, capsys, va
     expected = f"--ray.gpus_per_cell must be a fraction of one GPU (0.25) or a whole number of GPUs, got {shown}"
     assert expected in err and err.count("\n") == 1, err
     assert not out.exists()
+
+
+def test_a_shipped_study_is_named_without_its_path_and_a_file_of_that_name_here_wins(tmp_path, monkeypatch):
+    assert sweep_file_path(Path("paper_sim")) == studies_dir() / "paper_sim.yaml"
+    assert sweep_file_path(Path("paper_vln.yaml")) == studies_dir() / "paper_vln.yaml"
+    assert read_sweep_file(sweep_file_path(Path("paper_sim")))["eval"]["task"] == "language_table"
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, SMALL).rename(tmp_path / "paper_sim.yaml")
+    assert sweep_file_path(Path("paper_sim.yaml")) == Path("paper_sim.yaml")
+    assert sweep_file_path(Path("nowhere/paper_sim")) == Path("nowhere/paper_sim")

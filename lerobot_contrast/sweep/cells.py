@@ -9,6 +9,7 @@ import itertools
 import json
 import re
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +45,19 @@ class Cell:
     config: EvalConfig
     label: str | None = None  # the `name` of its entry in the sweep file's cells list
     shared: Path | None = None  # the folder of episodes its cells share (share_episodes: true), else None
+
+
+def studies_dir() -> Path:
+    """The sweep files shipped with the package (the paper's studies), named without their .yaml."""
+    return Path(str(resources.files("lerobot_contrast.sweep") / "studies"))
+
+
+def sweep_file_path(ref: Path) -> Path:
+    """The sweep file `ref` names: a path, or a shipped study's name (`paper_sim`) where no such file is here."""
+    shipped = studies_dir() / f"{ref.stem}.yaml"
+    if not ref.exists() and ref.parent == Path() and ref.suffix in ("", ".yaml") and shipped.is_file():
+        return shipped
+    return ref
 
 
 def read_sweep_file(path: Path) -> dict[str, Any]:

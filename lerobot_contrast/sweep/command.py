@@ -13,15 +13,16 @@ from rich.console import Console
 from lerobot_contrast.config import ConfigError
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.eval import planned_evaluation
+from lerobot_contrast.extras import require_extra
 from lerobot_contrast.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.sweep.cells import Cell, read_sweep_file, sweep_cells
+from lerobot_contrast.sweep.cells import Cell, read_sweep_file, sweep_cells, sweep_file_path
 from lerobot_contrast.sweep.settings import SweepConfig as SweepConfig  # where the scripts import it
 
 if TYPE_CHECKING:
     from lerobot_contrast.sweep.worker import CellOutcome
 
-COMMAND = "python -m lerobot_contrast.sweep SWEEP.yaml"
+COMMAND = "python -m lerobot_contrast.sweep SWEEP.yaml|STUDY"
 
 
 def sweep_folder(cfg: SweepConfig, spec: dict) -> Path:
@@ -71,6 +72,7 @@ def run_sweep(cfg: SweepConfig, console: Console) -> int:
     if cfg.sweep is None:
         raise ConfigError(f"give the sweep file: {COMMAND}")
     cfg.ray.check()
+    cfg.sweep = sweep_file_path(cfg.sweep)
     outcomes = execute(cfg, read_sweep_file(cfg.sweep), console)
     return int(any(outcome.status != "complete" for outcome in outcomes.values()))
 
@@ -148,6 +150,7 @@ def main(argv: list[str] | None = None) -> int:
         if wants_help(argv):
             print(usage_text(SweepConfig, f"{COMMAND} [--flag=value | --flag value] ..."))
             return 0
+        require_extra("sweep", "python -m lerobot_contrast.sweep")
         # The sweep file as the first argument, or as --sweep=PATH.
         return run_sweep(parse_config(SweepConfig, argv, positional="sweep"), console)
     except KeyboardInterrupt:
