@@ -73,6 +73,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     else:
         print(f"placed {command['object']} at x={command['x']:.3f} y={command['y']:.3f} m, yaw "
               f"{math.degrees(command['yaw']):.0f} deg")  # fmt: skip
+        if reply.get("moved_aside"):
+            print(f"moved out of the way, back where they wait: {', '.join(reply['moved_aside'])}")
     return 0
 
 

@@ -3,6 +3,7 @@ move the twin's objects. Requests and their replies (all lengths in metres, task
 forward, y to the arm's left; every reply has "ok", and "error" with one line when "ok" is false):
 
   {"cmd": "place", "object": NAME, "x": m, "y": m, "yaw": rad}  put an object down there, at rest (yaw optional)
+                                        -> {"moved_aside": [NAME]}: objects in the way, put back where they wait
   {"cmd": "scene"}                       -> {"objects": {NAME: [x, y, yaw]}, "z": {NAME: z}}: the true poses
   {"cmd": "board", "x": m, "y": m, "yaw_deg": deg}  lay the printed calibration board on the table
   {"cmd": "remove_board"}               -> {"removed": bool}
@@ -21,7 +22,7 @@ import zmq
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file.schema import TaskSpec
 from lerobot_contrast.twin.physics import Physics
-from lerobot_contrast.twin.scene import object_sizes, table_extent
+from lerobot_contrast.twin.scene import object_sizes, start_poses, table_extent
 
 HOST = "127.0.0.1"
 DEFAULT_PORT = 5556
@@ -38,6 +39,7 @@ class PlacementServer:
 
     def __init__(self, physics: Physics, task: TaskSpec, port: int = DEFAULT_PORT) -> None:
         self.physics, self.task, self.port = physics, task, port
+        self.parked = start_poses(task, None)  # where each object waits off the workspace
         self.address = f"tcp://{HOST}:{port}"
         self._context = zmq.Context()
         self._socket = self._context.socket(zmq.REP)
@@ -97,8 +99,8 @@ class PlacementServer:
                 "z": {name: z for name, (_, _, z, _) in poses.items()},
             }
         if command == "place":
-            self._place(request)
-        elif command == "board":
+            return {"moved_aside": self._place(request)}
+        if command == "board":
             from lerobot_contrast.twin.board import add_board
 
             x, y, yaw_deg = (_number(request, key) for key in ("x", "y", "yaw_deg"))
@@ -113,7 +115,7 @@ class PlacementServer:
             self.physics.reset_arm()
         return {}
 
-    def _place(self, request: dict[str, Any]) -> None:
+    def _place(self, request: dict[str, Any]) -> list[str]:
         name = request.get("object")
         objects = self.task.objects
         if name not in objects:
@@ -129,7 +131,24 @@ class PlacementServer:
                 f"({x:.3f}, {y:.3f}) m is off the table, which spans x {x0:.2f} to {x1:.2f} m and y {y0:.2f} to "
                 f"{y1:.2f} m (metres, not centimetres)"
             )
+        aside = self._in_the_way(name, x, y)
+        for other in aside:  # as a hand clears the spot first: an overlap would fling both objects apart
+            parked = self.parked[other]
+            self.physics.place(other, parked.x, parked.y, parked.yaw)
         self.physics.place(name, x, y, yaw)
+        return aside
+
+    def _in_the_way(self, name: str, x: float, y: float) -> list[str]:
+        """Objects lying where `name` is to go: closer than their half sizes together, the two would sit deep in each
+        other (nearer, a slight overlap is pushed apart gently by the contacts, as a hand would nudge it)."""
+        sizes = object_sizes(self.task)
+        return [
+            other
+            for other, (ox, oy, _, _) in self.physics.poses().items()
+            if other != name
+            and self.task.objects[other].movable
+            and math.hypot(ox - x, oy - y) < (sizes[name] + sizes[other]) / 2
+        ]
 
 
 def _number(request: dict[str, Any], key: str) -> float:

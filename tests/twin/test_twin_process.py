@@ -56,11 +56,35 @@ def test_bad_requests_get_one_line(placement, message, error):
 
 
 def test_place_then_scene_reports_the_true_pose(placement):
-    assert answer(placement, {"cmd": "place", "object": "red_cube", "x": 0.31, "y": -0.05, "yaw": 0.4}) == {"ok": True}
+    reply = answer(placement, {"cmd": "place", "object": "red_cube", "x": 0.31, "y": -0.05, "yaw": 0.4})
+    assert reply == {"ok": True, "moved_aside": []}
     placement.physics.run(0.3)
     scene = answer(placement, {"cmd": "scene"})
     assert scene["objects"]["red_cube"] == pytest.approx([0.31, -0.05, 0.4], abs=0.001)
     assert scene["z"]["red_cube"] == pytest.approx(0.015, abs=0.001)
+
+
+def test_placing_onto_another_object_puts_that_one_back_where_it_waits(placement):
+    physics = placement.physics
+    answer(placement, {"cmd": "place", "object": "blue_cube", "x": 0.25, "y": 0.05})
+    reply = answer(placement, {"cmd": "place", "object": "green_cube", "x": 0.26, "y": 0.05})
+    assert reply == {"ok": True, "moved_aside": ["blue_cube"]}
+    physics.run(0.3)
+    poses = physics.poses()
+    assert poses["green_cube"][:2] == pytest.approx((0.26, 0.05), abs=0.001)
+    assert poses["blue_cube"][:2] == pytest.approx((placement.parked["blue_cube"].x, placement.parked["blue_cube"].y))
+
+
+def test_a_fixed_object_cannot_be_placed():
+    from lerobot_contrast.domains.task_file import task_from_dict
+    from tests.twin.test_scene import other_task
+
+    task = task_from_dict(other_task()).spec
+    physics = Physics(build_spec(task), ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits()), task.objects)
+    reply = answer(
+        PlacementServer(physics, task, port=free_port()), {"cmd": "place", "object": "stand", "x": 0.2, "y": 0}
+    )
+    assert reply == {"ok": False, "error": "stand is fixed in the task file (movable: false); it cannot be placed"}
 
 
 def test_the_board_is_laid_and_removed_without_moving_anything(placement):
