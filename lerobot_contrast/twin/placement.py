@@ -4,7 +4,8 @@ forward, y to the arm's left; every reply has "ok", and "error" with one line wh
 
   {"cmd": "place", "object": NAME, "x": m, "y": m, "yaw": rad}  put an object down there, at rest (yaw optional)
                                         -> {"moved_aside": [NAME]}: objects in the way, put back where they wait
-  {"cmd": "scene"}                       -> {"objects": {NAME: [x, y, yaw]}, "z": {NAME: z}}: the true poses
+  {"cmd": "scene"}                       -> {"objects": {NAME: [x, y, yaw]}, "z": {NAME: z}, "time": s}: the true
+                                           poses, and the simulated time (it lags the wall clock on a busy machine)
   {"cmd": "board", "x": m, "y": m, "yaw_deg": deg}  lay the printed calibration board on the table
   {"cmd": "remove_board"}               -> {"removed": bool}
   {"cmd": "reset_arm"}                  put the arm at rest at once
@@ -97,6 +98,7 @@ class PlacementServer:
             return {
                 "objects": {name: [x, y, yaw] for name, (x, y, _, yaw) in poses.items()},
                 "z": {name: z for name, (_, _, z, _) in poses.items()},
+                "time": self.physics.read(lambda model, data: float(data.time)),
             }
         if command == "place":
             return {"moved_aside": self._place(request)}
