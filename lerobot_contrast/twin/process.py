@@ -3,6 +3,7 @@ physics, the placement socket, the camera publisher and the serial bus."""
 
 from __future__ import annotations
 
+import socket
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,6 +47,16 @@ class TwinConfig:
     faults: FaultsConfig = field(default_factory=FaultsConfig)
 
 
+def check_port(port: int, what: str, flag: str) -> None:
+    """Raise one line if `port` on 127.0.0.1 cannot be bound (as ZMQ binds it: reusing a port in TIME_WAIT)."""
+    with socket.socket() as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError as error:
+            raise UserError(f"{what} {port} on 127.0.0.1: {error.strerror}; choose a free one with {flag}") from None
+
+
 class Twin:
     """The running bench of `config`; `camera=False` leaves the webcam out (tests of the arm alone)."""
 
@@ -58,6 +69,10 @@ class Twin:
 
         self.config = config
         self.task = load_task_file(config.task).spec
+        # Before MuJoCo loads and compiles (seconds): a twin already running is the usual reason a port is taken.
+        check_port(config.control_port, "control port", "--control_port")
+        if camera:
+            check_port(config.camera_port, "camera port", "--camera_port")
         scene = sample_scene(self.task, np.random.default_rng(config.seed))
         self.bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
         # The camera draws the arm's meshes as light hulls (a third of the render time); contacts are unchanged.
