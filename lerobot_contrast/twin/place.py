@@ -16,8 +16,11 @@ USAGE = "usage: python -m lerobot_contrast.twin.place OBJECT X Y [YAW] [--contro
 
 def parse(argv: Sequence[str]) -> tuple[dict, int]:
     """The placement command and the twin's control port from the command line."""
-    port, words = DEFAULT_PORT, []
-    for arg in argv:
+    port, words, args = DEFAULT_PORT, [], list(argv)
+    while args:
+        arg = args.pop(0)
+        if arg == "--control_port" and args:  # the `--name value` form LeRobot's commands take too
+            arg = f"--control_port={args.pop(0)}"
         if arg.startswith("--control_port="):
             port = _integer(arg.split("=", 1)[1], "--control_port")
         elif arg.startswith("-") and not _is_number(arg):

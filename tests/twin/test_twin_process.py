@@ -201,3 +201,27 @@ def test_one_command_starts_a_bench_lerobot_connects_to_and_sigterm_stops(tmp_pa
     assert stderr.strip().endswith("twin stopped")
     with socket.socket() as s:
         s.bind(("127.0.0.1", control_port))  # its sockets went with it
+
+
+def test_the_place_command_takes_metres_and_degrees_and_names_bad_input():
+    from lerobot_contrast.contrast.errors import UserError
+    from lerobot_contrast.twin.place import parse
+
+    command, port = parse(["red_cube", "0.3", "-0.1", "90", "--control_port", "5999"])
+    assert port == 5999 and command == {"cmd": "place", "object": "red_cube", "x": 0.3, "y": -0.1, "yaw": math.pi / 2}
+    assert parse(["scene"]) == ({"cmd": "scene"}, 5556)
+    for argv, error in [
+        (["red_cube", "0.3"], "usage: python -m lerobot_contrast.twin.place OBJECT X Y [YAW]"),
+        (["red_cube", "left", "0"], "X='left' is not a number"),
+        (["red_cube", "0", "0", "--port=3"], "unknown flag --port"),
+    ]:
+        with pytest.raises(UserError, match=re.escape(error)):
+            parse(argv)
+
+
+def test_no_twin_answering_is_one_line():
+    from lerobot_contrast.contrast.errors import UserError
+
+    port = free_port()
+    with pytest.raises(UserError, match=rf"^no twin answers on tcp://127.0.0.1:{port} within 0.2 s; start it with"):
+        request({"cmd": "scene"}, port, timeout_s=0.2)
