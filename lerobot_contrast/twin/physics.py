@@ -118,6 +118,8 @@ class Physics:
                     memory = self.bank.memory(servo_id)
                     memory.write("Torque_Enable", 0)
                     memory.write("Torque_Enable", 1)
+                    # and the goal, for a bank mirroring a bus process that may see the writes before the measurement
+                    memory.write("Goal_Position", round(arm.to_raw(name, arm.REST[name])))
 
     def edit(self, change: Callable[[mujoco.MjSpec], None]) -> None:
         """Change the world (add or remove a body) and recompile, keeping every joint's state."""
