@@ -1,0 +1,73 @@
+"""Starting the virtual SO-101 (`python -m lerobot_contrast.twin`) as a child process and reading the endpoints it
+prints, for the recording script, the benchmark and the tests."""
+
+from __future__ import annotations
+
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import typing
+from dataclasses import dataclass
+
+from lerobot_contrast.contrast.errors import UserError
+
+ENDPOINTS = ("bus", "camera", "placement", "calibration", "eval flags")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@dataclass
+class RunningTwin:
+    process: subprocess.Popen
+    endpoints: dict[str, str]
+    log: typing.IO[str]
+
+    @property
+    def port(self) -> str:
+        return self.endpoints["bus"].split()[0]
+
+    @property
+    def placement(self) -> str:
+        return self.endpoints["placement"].split()[0]
+
+    @property
+    def robot_flags(self) -> str:
+        """The `--robot.*` flags the twin printed, for LeRobot's commands."""
+        return self.endpoints["eval flags"]
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+        try:
+            self.process.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.communicate()
+        self.log.close()
+
+
+def start_twin(*flags: str) -> RunningTwin:
+    """Start the twin with `flags` and wait for its endpoints; a twin that cannot start is one line saying why."""
+    # A file, not a pipe: nobody reads the twin's log while it runs. Closed when the twin stops.
+    log = tempfile.TemporaryFile("w+")  # noqa: SIM115
+    process = subprocess.Popen(
+        [sys.executable, "-m", "lerobot_contrast.twin", *flags], stdout=subprocess.PIPE, stderr=log, text=True
+    )
+    endpoints = {}
+    for _ in ENDPOINTS:
+        line = process.stdout.readline()
+        if not line:
+            process.wait()
+            log.seek(0)
+            error = log.read().strip().splitlines()
+            log.close()
+            raise UserError(f"the twin did not start: {error[-1] if error else 'no output'}")
+        key, _, value = line.partition(": ")
+        endpoints[key] = value.strip()
+    return RunningTwin(process, endpoints, log)

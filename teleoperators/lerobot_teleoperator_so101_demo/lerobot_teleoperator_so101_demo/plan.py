@@ -1,0 +1,94 @@
+"""What the demonstrator does for an instruction: its goal (matched against the task file's own templates), where
+the object goes, the joint goals that take it there (the twin's inverse kinematics), and each episode's placement."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping
+
+import mujoco
+import numpy as np
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.domains.task_file import FileTask, TaskSpec
+from lerobot_contrast.domains.task_file.goals import compose
+from lerobot_contrast.domains.task_file.world import sample_scene
+from lerobot_contrast.twin import arm, reach
+from lerobot_contrast.twin.scene import build_spec, object_sizes
+
+NEAR_GAP = 0.012  # m between the faces of an object put next to another: close enough, yet clear of its corners
+BIN_INSETS = (0.0, 0.015, 0.03)  # m towards the arm from a bin's middle, tried in turn when the middle is unreachable
+
+
+def _plain(text: str) -> str:
+    return " ".join(text.lower().replace(".", " ").split())
+
+
+def goal_of(task: FileTask, instruction: str) -> dict:
+    """The goal predicate of `instruction`: the template, wording and slots whose rendering it is."""
+    wanted, spec, example = _plain(instruction), task.spec, None
+    for template in spec.templates.values():
+        names = list(template.slots)
+        for values in itertools.product(*(template.slots[n].candidates for n in names)):
+            if len(set(values)) < len(values):
+                continue
+            slots = dict(zip(names, values, strict=True))
+            for text in template.texts:
+                for said in itertools.product(*(spec.words(v) for v in values)):
+                    rendered, goal = compose(template, text, slots, dict(zip(names, said, strict=True)))
+                    example = example or rendered
+                    if _plain(rendered) == wanted:
+                        return goal["predicate"]
+    raise UserError(
+        f"the instruction {instruction!r} is none of task {spec.name}'s; say it as its templates do, e.g. {example!r}"
+    )
+
+
+def arm_model(spec: TaskSpec) -> mujoco.MjModel:
+    """The twin's world as the twin builds it: the arm where the twin has it, for the inverse kinematics."""
+    return build_spec(spec).compile()
+
+
+def targets(predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec) -> list[tuple[float, float]]:
+    """Where to put the subject down, best first: a bin's middle (then nearer the arm), or beside the base object
+    across one of its faces, clear of the other objects, nearest the subject first."""
+    regions = spec.workspace.regions
+    if "in" in predicate:
+        cx, cy = regions[predicate["in"]].middle
+        reach_out = math.hypot(cx, cy)
+        return [(cx * (1 - inset / reach_out), cy * (1 - inset / reach_out)) for inset in BIN_INSETS]
+    subject, base = predicate["subject"], predicate["near"]
+    sizes = object_sizes(spec)
+    bx, by, _, byaw = poses[base]
+    distance = (sizes[subject] + sizes[base]) / 2 + NEAR_GAP
+    spots = [(bx + distance * math.cos(h), by + distance * math.sin(h)) for h in reach.headings(byaw)]
+    others = [(x, y) for name, (x, y, _, _) in poses.items() if name not in (subject, base)]
+    clear = [s for s in spots if all(math.dist(s, o) >= spec.workspace.min_spacing for o in others)]
+    sx, sy = poses[subject][:2]
+    return sorted(clear, key=lambda s: math.dist(s, (sx, sy)))
+
+
+def waypoints(model: mujoco.MjModel, predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec):
+    """The pick-and-place joint goals from rest for the first reachable target; Unreachable when none is."""
+    subject = predicate["subject"]
+    size = object_sizes(spec)[subject]
+    for target in targets(predicate, poses, spec):
+        try:
+            return reach.pick_and_place(model, arm.REST, poses[subject], size, target)
+        except reach.Unreachable:
+            continue
+    raise reach.Unreachable(f"no reachable place to put {subject} for {predicate}")
+
+
+def placement(spec: TaskSpec, seed: int, episode: int) -> dict[str, tuple[float, float, float]]:
+    """Episode `episode`'s placement of the evaluation set's objects (x, y, yaw): in their areas, apart by the task's
+    spacing, turned at random (a cube looks the same every quarter turn)."""
+    rng = np.random.default_rng([seed, episode])
+    scene = sample_scene(spec, rng)
+    if scene is None:
+        raise UserError(f"task {spec.name}: its objects do not fit apart in their areas; widen them")
+    movable = [name for name in scene.objects if spec.objects[name].movable]
+    return {
+        name: (scene.objects[name].x, scene.objects[name].y, rng.uniform(-math.pi / 4, math.pi / 4)) for name in movable
+    }
