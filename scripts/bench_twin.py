@@ -1,8 +1,13 @@
 """Time LeRobot's own `SO101Follower` on the virtual SO-101's serial bus, from a process that loads no code of this
-project (the twin's bus runs in a child process). Figures last: connect_s=... reach_s=... (the slowest of the poses
-to within 2 degrees) sync_read_ms=... sync_write_ms=... write_ms=... project_code_loaded=false.
+project (the twin's bus runs in a child process); with --eval, then the evaluator on the whole twin (640x480 camera,
+30 Hz, the scripted operator, a random-weight ACT for the SO-101's features): the control loop's mean period, how
+often the staging camera flags cubes placed 4 cm and 0.5 cm off, and --cost=measured against the twin's truth.
 
-    .venv/bin/python scripts/bench_twin.py
+Figures last: connect_s=... reach_s=... (the slowest of the poses to within 2 degrees) sync_read_ms=...
+sync_write_ms=... write_ms=... project_code_loaded=false [period_ms=... flagged_4cm=... flagged_05cm=...
+measured_cost_err_cm=...].
+
+    .venv/bin/python scripts/bench_twin.py [--eval --instances=4]
 """
 
 from __future__ import annotations
@@ -88,9 +93,97 @@ def measure(port: str, calibration_dir: Path, robot_id: str, repeats: int) -> di
     return figures
 
 
+def eval_figures(work: Path, instances: int) -> dict[str, str]:
+    """The evaluator on the whole twin; the bench's own process loads the project from here on."""
+    import json
+    import os
+    import re
+    import shlex
+    import socket
+    import subprocess
+
+    def free_port() -> int:
+        with socket.socket() as probe:
+            probe.bind(("127.0.0.1", 0))
+            return probe.getsockname()[1]
+
+    camera, control = free_port(), free_port()
+    python = sys.executable
+    twin = subprocess.Popen(
+        [python, "-m", "lerobot_contrast.twin", f"--calibration_dir={work / 'calibration'}",
+         f"--camera_port={camera}", f"--control_port={control}"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )  # fmt: skip
+    try:
+        flags = next(shlex.split(line[12:]) for line in twin.stdout if line.startswith("eval flags: "))
+        policy = save_act(work / "act")
+        placement = f"tcp://127.0.0.1:{control}"
+        ask(placement, {"cmd": "board", "x": 0.30, "y": 0.0, "yaw_deg": 0})
+        table = work / "table.calibration.json"
+        calibrate = [python, "-m", "lerobot_contrast.calibrate", "--task=so101_blocks", "--board.x=0.30",
+                     "--board.y=0", "--board.yaw_deg=0", f"--output={table}", *flags]  # fmt: skip
+        subprocess.run(calibrate, check=True)
+        ask(placement, {"cmd": "remove_board"})
+        figures, periods = {}, []
+        for name, error in (("flagged_4cm", "offset:0.04"), ("flagged_05cm", "offset:0.005")):
+            run_dir = work / name
+            command = [python, "-m", "lerobot_contrast.twin.operator", f"--placement={placement}",
+                       f"--placement_error={error}", "--task=so101_blocks", *flags, f"--policy.path={policy}",
+                       "--policy.device=cpu", "--strategy=standard", f"--n_instances={instances}", "--fps=30",
+                       "--max_episode_s=3", "--cost=measured", f"--staging.calibration={table}",
+                       "--staging.viewer=none", f"--output_dir={run_dir}"]  # fmt: skip
+            said = subprocess.run(command, capture_output=True, text=True, env={**os.environ}).stdout
+            records = [json.loads(line) for line in (run_dir / "journal.jsonl").read_text().splitlines()]
+            placed, flagged = 0, 0
+            for record, trial in zip(records, re.split(r"trial \d+/\d+ · ", said)[1:], strict=False):
+                off = record["extra"]["staging"]["off_m"]
+                for cube in re.findall(r"\[operator\] placed (\w+) ", trial):
+                    placed, flagged = placed + 1, flagged + (off.get(cube) is None or off[cube] > 0)
+            figures[name] = f"{flagged / max(placed, 1):.3f}"
+            periods += [r["duration_s"] / r["steps"] for r in records if r["status"] == "done" and r["steps"]]
+            truth = [float(x) for x in re.findall(r"\[operator\] moved (\d+\.\d+) m", said)]
+            errors = [abs(r["extra"]["staging"]["moved_m"] - t) for r, t in zip(records, truth, strict=False)]
+            figures[f"measured_cost_err_cm_{name[8:]}"] = f"{max(errors, default=float('nan')) * 100:.2f}"
+        figures["period_ms"] = f"{statistics.fmean(periods) * 1e3:.1f}"
+        return figures
+    finally:
+        twin.terminate()
+        twin.wait(timeout=30)
+
+
+def save_act(directory: Path) -> Path:
+    from lerobot.cameras.zmq import ZMQCameraConfig
+
+    from lerobot_contrast.policies.pretrained import save_fresh_policy
+
+    small = {"dim_model": 64, "n_heads": 2, "dim_feedforward": 128, "n_encoder_layers": 1, "n_decoder_layers": 1,
+             "chunk_size": 5, "n_action_steps": 5, "use_vae": False}  # fmt: skip
+    camera = ZMQCameraConfig(server_address="127.0.0.1", port=5555, camera_name="front", width=640, height=480, fps=30)
+    config = SO101FollowerConfig(port="unused", id="act", calibration_dir=directory / "calibration",
+                                 cameras={"front": camera})  # fmt: skip
+    return save_fresh_policy(SO101Follower(config), "act", directory, device="cpu", **small)
+
+
+def ask(address: str, request: dict) -> dict:
+    import json
+
+    import zmq
+
+    socket = zmq.Context.instance().socket(zmq.REQ)
+    socket.connect(address)
+    socket.send_string(json.dumps(request))
+    reply = json.loads(socket.recv())
+    socket.close()
+    if not reply.get("ok"):
+        sys.exit(f"bench_twin: the twin refused {request}: {reply.get('error')}")
+    return reply
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=300, help="calls per latency figure")
+    parser.add_argument("--eval", action="store_true", help="then time the evaluator on the whole twin")
+    parser.add_argument("--instances", type=int, default=4, help="trials per staging figure (--eval)")
     args = parser.parse_args()
     spawn = multiprocessing.get_context("spawn")
     ports, stop = spawn.Queue(), spawn.Event()
@@ -103,6 +196,9 @@ def main() -> None:
             stop.set()
             child.join(timeout=10)
     figures["project_code_loaded"] = str(any(m.startswith("lerobot_contrast") for m in sys.modules)).lower()
+    if args.eval:
+        with tempfile.TemporaryDirectory() as work:
+            figures |= eval_figures(Path(work), args.instances)
     print(" ".join(f"{name}={value}" for name, value in figures.items()))
 
 

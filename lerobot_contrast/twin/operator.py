@@ -146,6 +146,7 @@ class Operator:
         self.flagged: list[str] = []
         self.fixes = 0
         self.placed: list[dict] = []  # every placement made: object, target, where it was put
+        self.said: list[str] = []  # what the operator reports beside its answers
 
     def read(self, line: str) -> str | None:
         """Take one line of the console's output; returns what to type (a line) when it is a prompt."""
@@ -159,7 +160,11 @@ class Operator:
         elif found := OFF.match(line):
             self.flagged.append(found.group(1))
         elif STAGED_PROMPT in line:
+            before = self.placement.scene()
             self._place(self.moves)
+            after = self.placement.scene()
+            moved = sum(pose.distance_to(after.objects[name]) for name, pose in before.objects.items())
+            self.said.append(f"moved {moved:.3f} m (the twin's truth)")
             return ""
         elif CHECK_PROMPT in line:
             if self.on_flagged == "fix" and self.fixes < 2:
@@ -183,6 +188,7 @@ class Operator:
                 continue
             dx, dy = self.error.draw(self.rng)
             self.placement.place(name, target[0] + dx, target[1] + dy)
+            self.said.append(f"placed {name} {np.hypot(dx, dy) * 100:.1f} cm from its target")
             self.placed.append({"trial": self.index, "object": name, "target": target, "offset": [dx, dy]})
 
 
@@ -198,6 +204,9 @@ def run_eval(eval_argv: Sequence[str], operator: Operator) -> int:
             for line in child.stdout:
                 print(line, end="", flush=True)
                 typed = operator.read(line.rstrip("\n"))
+                for said in operator.said:
+                    print(f"[operator] {said}", flush=True)
+                operator.said.clear()
                 if typed is not None:
                     print(f"[operator] {typed or 'Enter'}", flush=True)
                     child.stdin.write(typed + "\n")

@@ -1,0 +1,160 @@
+"""The evaluator on the virtual SO-101, as on the arm: `python -m lerobot_contrast.twin` in one process, the scripted
+operator answering `python -m lerobot_contrast.eval --operator=console` in another, LeRobot's so101_follower and zmq
+camera between them. The policy under test is a random-weight ACT made for the SO-101's features."""
+
+import json
+import os
+import shlex
+import signal
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan
+
+FRAME = ("--width=160", "--height=120")  # a small camera keeps the test quick; the bench times 640x480
+RUN = ("--task=so101_blocks", "--strategy=contrast", "--n_instances=1", "--perturbations=L,S1", "--fps=30")
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+class Twin:
+    """The twin process; `flags` are the eval flags it printed, `placement` its placement socket."""
+
+    def __init__(self, calibration_dir: Path, camera: int, control: int):
+        command = [sys.executable, "-m", "lerobot_contrast.twin", f"--calibration_dir={calibration_dir}",
+                   f"--camera_port={camera}", f"--control_port={control}", *FRAME]  # fmt: skip
+        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.placement = f"tcp://127.0.0.1:{control}"
+        seen = []
+        for line in self.process.stdout:
+            seen.append(line)
+            if line.startswith("eval flags: "):
+                self.flags = shlex.split(line.removeprefix("eval flags: "))
+                return
+        raise AssertionError(f"the twin did not start: {''.join(seen)}")
+
+    def kill(self) -> None:
+        self.process.kill()
+        self.process.wait()
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            self.process.wait(timeout=30)
+
+
+@pytest.fixture
+def policy(tmp_path) -> Path:
+    from lerobot.cameras.zmq import ZMQCameraConfig
+    from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
+
+    from lerobot_contrast.policies.pretrained import save_fresh_policy
+    from tests.lerobot_helpers import SMALL_ACT
+
+    camera = ZMQCameraConfig(server_address="127.0.0.1", port=5555, camera_name="front", width=160, height=120, fps=30)
+    config = SO101FollowerConfig(port="unused", id="act", calibration_dir=tmp_path / "act_calibration",
+                                 cameras={"front": camera})  # fmt: skip
+    return save_fresh_policy(SO101Follower(config), "act", tmp_path / "act", device="cpu", **SMALL_ACT)
+
+
+def operator(twin: Twin, *flags: str) -> subprocess.Popen:
+    command = [sys.executable, "-m", "lerobot_contrast.twin.operator", f"--placement={twin.placement}", *flags]
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+
+
+def journal(run_dir: Path) -> list[dict]:
+    return [json.loads(line) for line in (run_dir / "journal.jsonl").read_text().splitlines()]
+
+
+@pytest.mark.slow
+def test_a_contrast_set_runs_on_the_twin_and_a_killed_twin_resumes_with_nothing_lost(tmp_path, policy):
+    run_dir = tmp_path / "run"
+    ports = free_port(), free_port()  # a restarted twin keeps its camera's port: only the serial port is new
+    twin = Twin(tmp_path / "calibration", *ports)
+    try:
+        flags = [*RUN, *twin.flags, f"--policy.path={policy}", "--policy.device=cpu", "--max_episode_s=2"]
+        answering = operator(twin, "--placement_error=normal:0.005", *flags, f"--output_dir={run_dir}")
+        said = []
+        for line in answering.stdout:
+            said.append(line)
+            if line.startswith("running ·"):
+                twin.kill()  # mid-episode: the arm loses power
+        answering.wait(timeout=120)
+        output = "".join(said)
+        assert "[operator] Enter" in output  # staged through the placement socket
+        assert "aborted: the robot disconnected after" in output, output
+        assert f"--output_dir={run_dir} --resume=true" in output
+        assert [r["status"] for r in journal(run_dir)] == ["aborted"]
+    finally:
+        twin.stop()
+    twin = Twin(tmp_path / "calibration", *ports)
+    try:
+        port = next(flag for flag in twin.flags if flag.startswith("--robot.port="))
+        resume = [f"--output_dir={run_dir}", "--resume=true", "--robot.type=so101_follower", port]
+        resumed = operator(twin, *resume)
+        output = resumed.communicate(timeout=300)[0]
+        assert resumed.returncode == 0, output
+        records = journal(run_dir)
+        assert [(r["index"], r["status"]) for r in records] == [(0, "done"), (1, "done"), (2, "done")], output
+        answers = [
+            line.removeprefix("[operator] ") for line in output.splitlines() if line in ("[operator] y", "[operator] n")
+        ]
+        assert [bool(r["success"]) for r in records] == [a == "y" for a in answers]
+    finally:
+        twin.stop()
+
+
+class FakePlacement:
+    """The twin's placement socket, as the operator sees it: where it put things, and a scene to report."""
+
+    def __init__(self, scene: Scene):
+        self.placed, self.reported = {}, scene
+
+    def place(self, name: str, x: float, y: float) -> None:
+        self.placed[name] = (x, y)
+
+    def scene(self) -> Scene:
+        return self.reported
+
+
+CONSOLE = """\
+───── trial 1/3 · so101_blocks-0000 · original ─────
+instruction: put the red cube next to the green cube
+│ green_cube │ (+0.300, +0.350) │ (+0.320, -0.041) │ 0.392        │
+│ red_cube   │ (+0.150, +0.350) │ (+0.269, +0.057) │ 0.316        │
+planned cost: 0.99 m
+Enter when staged · c METRES if you moved things differently · k skip trial · q stop session
+│ red_cube │ 4.1 cm off │
+Enter after fixing them to measure again · a accept as placed · q stop session
+running · s success · f failure · e EMERGENCY STOP (then Enter)
+outcome? y success · n failure · p FRACTION progress · r redo · k skip · q stop (this trial is not recorded)"""
+
+
+@pytest.mark.parametrize(("red", "label"), [((0.30, -0.02), "y"), ((0.20, 0.20), "n")])
+def test_the_operator_places_what_the_console_says_and_labels_from_the_true_scene(red, label):
+    plan = Plan([*RUN, "--robot.type=so101_follower", "--robot.port=unused"])
+    truth = Scene({"red_cube": Pose(*red), "green_cube": Pose(0.32, -0.041), "blue_cube": Pose(0.39, 0.07)})
+    placement = FakePlacement(truth)
+    scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="fix")
+    typed = [answer for line in CONSOLE.splitlines() if (answer := scripted.read(line)) is not None]
+    assert typed == ["", "", label]  # staged, the flagged cube placed again, the label the scene shows
+    assert placement.placed == {"green_cube": (0.320, -0.041), "red_cube": (0.269, 0.057)}
+
+
+def test_the_operators_bad_input_is_one_line():
+    with pytest.raises(OperatorError, match="--placement_error=uniform:1: give none, normal:SIGMA or offset:D"):
+        PlacementError.parse("uniform:1")
+    offset = PlacementError.parse("offset:0.04")
+    dx, dy = offset.draw(np.random.default_rng(0))
+    assert abs((dx**2 + dy**2) ** 0.5 - 0.04) < 1e-12
