@@ -6,6 +6,7 @@ from __future__ import annotations
 import functools
 import importlib.util
 import math
+from collections.abc import Mapping
 from pathlib import Path
 
 import mujoco
@@ -99,6 +100,11 @@ def from_lerobot(name: str, value: float) -> float:
         low, high = joint_ranges()[name]
         return low + value / 100 * (high - low)
     return math.radians(value)
+
+
+def lerobot_action(angles: Mapping[str, float]) -> dict[str, float]:
+    """Joint angles (radians, by motor) as the action LeRobot's `so101_follower` takes: {"<motor>.pos": value}."""
+    return {f"{name}.pos": to_lerobot(name, angle) for name, angle in angles.items()}
 
 
 def rest_raw() -> dict[str, int]:

@@ -115,3 +115,8 @@ def test_servos_reach_a_commanded_pose_and_hold_it_under_gravity(blocks):
         assert arm.to_lerobot(name, joint) == pytest.approx(value, abs=1.0)  # the model's joint, as LeRobot reads it
         assert arm.to_lerobot(name, arm.to_angle(name, bank.present(name))) == pytest.approx(value, abs=1.0)
     assert math.isfinite(physics.poses()["red_cube"][0])
+
+
+def test_joint_goals_become_lerobots_action():
+    action = arm.lerobot_action({"shoulder_pan": math.radians(30), arm.GRIPPER: arm.joint_ranges()[arm.GRIPPER][1]})
+    assert action == pytest.approx({"shoulder_pan.pos": 30.0, "gripper.pos": 100.0})
