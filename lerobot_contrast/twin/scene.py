@@ -85,8 +85,8 @@ def start_poses(task: TaskSpec, scene: Scene | None) -> dict[str, Pose]:
     step = (row[-1].x - row[-2].x, row[-1].y - row[-2].y) if len(row) > 1 else (SPARE_GAP, 0.0)
     spares = [name for name, obj in task.objects.items() if obj.spare]
     end = row[-1] if row else Pose(*task.workspace.area.middle)
+    scale = SPARE_GAP / max(math.hypot(*step), 1e-9)
     for k, name in enumerate(spares, start=1):
-        scale = SPARE_GAP / max(math.hypot(*step), 1e-9)
         parked[name] = Pose(end.x + k * step[0] * scale, end.y + k * step[1] * scale)
     given = {} if scene is None else scene.objects
     return {name: given.get(name, parked[name]) if obj.movable else obj.at for name, obj in task.objects.items()}
