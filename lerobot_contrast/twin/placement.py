@@ -88,6 +88,8 @@ class PlacementServer:
             return {"ok": True, **self.handle(request)}
         except RequestError as error:
             return _error(str(error))
+        except Exception as error:  # the socket must keep answering: a dead thread would leave the client waiting
+            return _error(f"{request.get('cmd')} failed in the twin: {' '.join(str(error).split())[:200]}")
 
     def handle(self, request: dict[str, Any]) -> dict[str, Any]:
         command = request.get("cmd")

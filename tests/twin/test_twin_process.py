@@ -99,6 +99,15 @@ def test_the_board_is_laid_and_removed_without_moving_anything(placement):
     assert answer(placement, {"cmd": "remove_board"}) == {"ok": True, "removed": False}
 
 
+def test_a_command_that_fails_inside_the_twin_is_an_error_reply_not_a_dead_socket(placement, monkeypatch):
+    def broken(change):
+        raise RuntimeError("XML Error: something\nwith two lines")
+
+    monkeypatch.setattr(placement.physics, "edit", broken)
+    reply = answer(placement, {"cmd": "board", "x": 0.3, "y": 0.0, "yaw_deg": 0})
+    assert reply == {"ok": False, "error": "board failed in the twin: XML Error: something with two lines"}
+
+
 def test_reset_arm_puts_it_at_rest(placement):
     physics = placement.physics
     physics.bank.memory(arm.MOTORS["shoulder_pan"][0]).write("Torque_Enable", 1)
