@@ -4,6 +4,7 @@ setpoints, and the measured joint angles go back as Present_Position. Real time 
 from __future__ import annotations
 
 import math
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -33,6 +34,7 @@ class Physics:
         self.version = 0  # counts recompilations (edit), so a renderer knows to rebuild
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
+        self.error: str | None = None  # why the real-time thread stopped, if it failed
         for name in arm.MOTOR_NAMES:
             angle = arm.to_angle(name, bank.present(name))
             self.data.qpos[self.model.joint(name).qposadr[0]] = angle
@@ -75,14 +77,18 @@ class Physics:
 
     def _loop(self) -> None:
         due = time.monotonic()
-        while not self._stop.is_set():
-            self.tick()
-            due += CONTROL_DT
-            lag = time.monotonic() - due
-            if lag > MAX_LAG:
-                due = time.monotonic()
-            elif lag < 0:
-                self._stop.wait(-lag)
+        try:
+            while not self._stop.is_set():
+                self.tick()
+                due += CONTROL_DT
+                lag = time.monotonic() - due
+                if lag > MAX_LAG:
+                    due = time.monotonic()
+                elif lag < 0:
+                    self._stop.wait(-lag)
+        except Exception as error:  # a frozen arm must say why
+            self.error = f"twin physics stopped: {' '.join(str(error).split())[:200]}"
+            print(self.error, file=sys.stderr)
 
     def read(self, view: Callable[[mujoco.MjModel, mujoco.MjData], T]) -> T:
         """`view(model, data)` while no step runs: a consistent state (a renderer's update_scene, say)."""

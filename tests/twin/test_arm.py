@@ -3,6 +3,7 @@ the model's joint angles (checked through LeRobot's own normalisation), and serv
 
 import math
 import subprocess
+import time
 from pathlib import Path
 
 import mujoco
@@ -120,3 +121,23 @@ def test_servos_reach_a_commanded_pose_and_hold_it_under_gravity(blocks):
 def test_joint_goals_become_lerobots_action():
     action = arm.lerobot_action({"shoulder_pan": math.radians(30), arm.GRIPPER: arm.joint_ranges()[arm.GRIPPER][1]})
     assert action == pytest.approx({"shoulder_pan.pos": 30.0, "gripper.pos": 100.0})
+
+
+def test_the_real_time_thread_keeps_to_the_clock_and_says_why_it_stops(blocks, capsys):
+    bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
+    physics = Physics(build_spec(blocks), bank, blocks.objects)
+    physics.start()
+    try:
+        time.sleep(0.5)
+        simulated = physics.read(lambda model, data: data.time)
+        assert 0.1 < simulated < 0.6  # never ahead of the wall clock; behind only as far as a busy machine makes it
+
+        def unplugged(dt):
+            raise OSError("the bus process is gone")
+
+        bank.step = unplugged
+        time.sleep(0.2)
+    finally:
+        physics.stop()
+    assert physics.error == "twin physics stopped: the bus process is gone"
+    assert capsys.readouterr().err == "twin physics stopped: the bus process is gone\n"
