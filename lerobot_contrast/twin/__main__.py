@@ -33,7 +33,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         twin = Twin(config)
         endpoints = twin.start()
-    except (UserError, ValueError, ImportError) as error:
+    except (UserError, ValueError, ImportError, RuntimeError, OSError) as error:
         print(f"error: {' '.join(str(error).split())}", file=sys.stderr)
         return 2
     try:
@@ -43,12 +43,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"placement: {endpoints['placement']} (python -m lerobot_contrast.twin.place OBJECT X Y [YAW])")
         print(f"calibration: {endpoints['calibration']}")
         print(f"eval flags: {twin.eval_flags()}", flush=True)
-        while not stopping.wait(0.5):
+        while not stopping.wait(0.5) and twin.failure is None:
             pass
+        failed = twin.failure  # a part's thread printed why; the twin cannot go on without it
     finally:
         twin.stop()
     print("twin stopped", file=sys.stderr)
-    return 0
+    return 0 if failed is None else 1
 
 
 if __name__ == "__main__":

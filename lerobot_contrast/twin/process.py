@@ -125,6 +125,11 @@ class Twin:
         self.cameras_flag = robot_cameras(server, args)
         return server.address
 
+    @property
+    def failure(self) -> str | None:
+        """Why a part stopped on its own (its thread printed it already), or None while all run."""
+        return next((part.error for part in self._running if getattr(part, "error", None)), None)
+
     def stop(self) -> None:
         while self._running:
             self._running.pop().stop()
