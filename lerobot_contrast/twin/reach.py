@@ -1,8 +1,9 @@
 """Joint goals that pick an object up and put it down elsewhere, from inverse kinematics on the twin's model.
 
-The IK is damped least squares on MuJoCo's Jacobian over the full pose of the point between the jaws (position,
-jaws pointing down, closing across the object's faces): the SO-101's five arm joints reach such a top-down pose
-exactly wherever it is reachable, so no IK library (and its QP solver) is needed."""
+The IK is damped least squares on MuJoCo's Jacobians with priorities: the point between the jaws goes where asked,
+and the motion left closes the jaws across the object's faces and points them as nearly down as five joints allow
+(the SO-101 grasps straight down only to about 30 cm out). That is a few dozen lines; an IK library (mink) would add
+a QP solver to the twin's dependencies for the same five-joint problem."""
 
 from __future__ import annotations
 
