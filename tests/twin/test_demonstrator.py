@@ -1,0 +1,162 @@
+"""The scripted demonstrator (`--teleop.type=so101_demo`): it understands every so101_blocks instruction, places the
+cubes anew (seeded) when it connects and at each reset period, hands out joint goals in LeRobot's degrees, and
+`lerobot-record` records with it on the twin a dataset that loads."""
+
+import math
+import subprocess
+import sys
+
+import pytest
+from lerobot_teleoperator_so101_demo import SO101Demo, SO101DemoConfig, plan
+from lerobot_teleoperator_so101_demo import so101_demo as demo_module
+from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.domains.task_file import load_task_file
+from lerobot_contrast.twin import arm
+from lerobot_contrast.twin.physics import Physics
+from lerobot_contrast.twin.placement import PlacementServer
+from lerobot_contrast.twin.scene import build_spec
+from lerobot_contrast.twin.servos import ServoBank
+from tests.study_scripts import load_script
+
+INSTRUCTION = "put the red cube in the left bin"
+
+
+@pytest.fixture(scope="module")
+def task():
+    return load_task_file("so101_blocks")
+
+
+@pytest.fixture(scope="module")
+def placement(task):
+    bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
+    server = PlacementServer(Physics(build_spec(task.spec), bank, task.spec.objects), task.spec, port=free_port())
+    server.start()
+    yield server
+    server.stop()
+
+
+@pytest.mark.parametrize(
+    ("instruction", "goal"),
+    [
+        ("Put the red cube in the left bin.", {"subject": "red_cube", "in": "left_bin"}),
+        ("pick up the blue cube and put it in the bin on the right", {"subject": "blue_cube", "in": "right_bin"}),
+        ("move the green cube beside the red cube", {"subject": "green_cube", "near": "red_cube", "within": 0.05}),
+    ],
+)
+def test_instructions_are_read_with_the_task_files_templates(task, instruction, goal):
+    assert plan.goal_of(task, instruction) == goal
+
+
+def test_an_instruction_the_task_cannot_say_is_one_line(task):
+    with pytest.raises(UserError, match=r"^the instruction 'stack the cubes' is none of task so101_blocks's") as error:
+        plan.goal_of(task, "stack the cubes")
+    assert "\n" not in str(error.value)
+
+
+def test_placements_are_seeded_apart_and_in_the_play_area(task):
+    spec = task.spec
+    first = plan.placement(spec, seed=3, episode=0)
+    assert first == plan.placement(spec, seed=3, episode=0)
+    assert first != plan.placement(spec, seed=3, episode=1) != plan.placement(spec, seed=4, episode=0)
+    assert set(first) == set(spec.placed)  # the spare cube stays off the table
+    area = spec.workspace.regions["play_area"]
+    for name, (x, y, _) in first.items():
+        assert area.contains(x, y)
+        others = [(ox, oy) for other, (ox, oy, _) in first.items() if other != name]
+        assert all(math.dist((x, y), o) >= spec.workspace.min_spacing for o in others)
+
+
+def test_next_to_targets_lie_beside_the_base_within_the_goal(task):
+    poses = {"red_cube": (0.3, 0.0, 0.015, 0.0), "green_cube": (0.25, 0.05, 0.015, 0.0),
+             "blue_cube": (0.36, -0.08, 0.015, 0.0)}  # fmt: skip
+    goal = plan.goal_of(task, "put the green cube next to the red cube")
+    spots = plan.targets(goal, poses, task.spec)
+    assert spots and all(0.03 < math.dist(spot, (0.3, 0.0)) <= goal["within"] for spot in spots)
+    assert all(math.dist(spot, (0.36, -0.08)) >= task.spec.workspace.min_spacing for spot in spots)
+
+
+def where(server, names) -> list[float]:
+    """The objects' x, y on the twin, in the order of `names`."""
+    objects = server.answer(b'{"cmd": "scene"}')["objects"]
+    return [value for name in names for value in objects[name][:2]]
+
+
+def planned(spec, seed: int, episode: int) -> tuple[list[str], list[float]]:
+    placed = plan.placement(spec, seed, episode)
+    return list(placed), [value for x, y, _ in placed.values() for value in (x, y)]
+
+
+def calls_until(teleop, clock: list[float], until: float) -> dict[str, float]:
+    """lerobot-record's loop: get_action at 30 Hz until the clock reads `until`; the last action."""
+    while clock[0] < until:
+        clock[0] += 1 / 30
+        action = teleop.get_action()
+    return action
+
+
+def test_the_cubes_are_placed_anew_at_each_reset_and_the_plan_restarts_after_the_save(placement, monkeypatch):
+    clock = [100.0]
+    monkeypatch.setattr(demo_module.time, "monotonic", lambda: clock[0])
+    config = SO101DemoConfig(placement=placement.address, instruction=INSTRUCTION, episode_time_s=20, seed=7)
+    teleop = SO101Demo(config)
+    teleop.connect()
+    names, first = planned(placement.task, 7, 0)
+    assert where(placement, names) == pytest.approx(first, abs=1e-3)
+    action = teleop.get_action()
+    assert set(action) == set(teleop.action_features) == {f"{name}.pos" for name in arm.MOTOR_NAMES}
+    assert 5 < teleop.schedule_s < 20  # the pick-and-place fits the episode
+    opened = calls_until(teleop, clock, 101.0)  # on the way in: the jaws open
+    assert opened["gripper.pos"] > arm.to_lerobot("gripper", arm.REST["gripper"]) + 10
+    # The reset period: at rest, the cubes placed for the next episode.
+    assert calls_until(teleop, clock, 120.5) == pytest.approx(
+        {f"{n}.pos": arm.to_lerobot(n, arm.REST[n]) for n in arm.MOTOR_NAMES}
+    )
+    names, second = planned(placement.task, 7, 1)
+    assert where(placement, names) == pytest.approx(second, abs=1e-3)
+    clock[0] += 2.0 - 1 / 30  # lerobot-record saved the episode: the next one begins, planned on the new scene
+    assert calls_until(teleop, clock, 123.5)["gripper.pos"] == pytest.approx(opened["gripper.pos"], abs=0.5)
+    assert teleop.episode == 2
+    teleop.disconnect()
+
+
+def test_a_twin_that_does_not_answer_is_one_line():
+    config = SO101DemoConfig(placement=f"tcp://127.0.0.1:{free_port()}", instruction=INSTRUCTION)
+    with pytest.raises(UserError, match=r"^so101_demo: the twin's placement socket .* did not answer"):
+        SO101Demo(config).connect()
+
+
+def test_the_recording_script_answers_a_bad_instruction_in_one_line(tmp_path):
+    script = "scripts/record_so101_demos.py"
+    done = subprocess.run([sys.executable, script, f"--output={tmp_path / 'd'}", "--task=juggle"],
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert done.returncode == 2 and done.stderr.startswith("error: --task: the instruction 'juggle' is none of")
+    assert done.stderr.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_lerobot_record_records_two_episodes_on_the_twin(tmp_path, task):
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    record = load_script("record_so101_demos")
+    args = record.parse_args([f"--output={tmp_path / 'demos'}", "--episodes=2", "--reset_time_s=0.5",
+                              "--width=96", "--height=72", "--seed=5"])  # fmt: skip
+    twin = start_twin(f"--calibration_dir={tmp_path}", f"--camera_port={free_port()}", f"--control_port={free_port()}",
+                      "--width=96", "--height=72", "--seed=5")  # fmt: skip
+    try:
+        assert record.record(args, twin, 0) == 0
+        from lerobot_contrast.twin.placement import request
+
+        scene = request({"cmd": "scene"}, int(twin.placement.rsplit(":", 1)[1]))["objects"]
+    finally:
+        twin.stop()
+    dataset = LeRobotDataset(record.REPO_ID, root=tmp_path / "demos")
+    assert dataset.num_episodes == 2 and dataset.meta.robot_type == "so101_follower"
+    assert dataset.features["action"]["names"] == [f"{name}.pos" for name in arm.MOTOR_NAMES]
+    assert dataset.features["observation.images.front"]["shape"] == (72, 96, 3)
+    assert dataset[0]["task"] == INSTRUCTION
+    # The second episode's cubes were placed in the reset period: the ones left alone lie where its placement put them.
+    second = plan.placement(task.spec, 5, 1)
+    for name in ("green_cube", "blue_cube"):
+        assert scene[name][:2] == pytest.approx(second[name][:2], abs=0.01)
