@@ -30,9 +30,9 @@ def free_port() -> int:
 class Twin:
     """The twin process; `flags` are the eval flags it printed, `placement` its placement socket."""
 
-    def __init__(self, calibration_dir: Path, camera: int, control: int):
+    def __init__(self, calibration_dir: Path, camera: int, control: int, *flags: str):
         command = [sys.executable, "-m", "lerobot_contrast.twin", f"--calibration_dir={calibration_dir}",
-                   f"--camera_port={camera}", f"--control_port={control}", *FRAME]  # fmt: skip
+                   f"--camera_port={camera}", f"--control_port={control}", *FRAME, *flags]  # fmt: skip
         self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         self.placement = f"tcp://127.0.0.1:{control}"
         seen = []
@@ -53,8 +53,8 @@ class Twin:
             self.process.wait(timeout=30)
 
 
-@pytest.fixture
-def policy(tmp_path) -> Path:
+def save_so101_act(directory: Path) -> Path:
+    """A random-weight ACT for the SO-101's six joints and the twin's `front` camera at the tests' frame size."""
     from lerobot.cameras.zmq import ZMQCameraConfig
     from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
 
@@ -62,9 +62,14 @@ def policy(tmp_path) -> Path:
     from tests.lerobot_helpers import SMALL_ACT
 
     camera = ZMQCameraConfig(server_address="127.0.0.1", port=5555, camera_name="front", width=160, height=120, fps=30)
-    config = SO101FollowerConfig(port="unused", id="act", calibration_dir=tmp_path / "act_calibration",
+    config = SO101FollowerConfig(port="unused", id="act", calibration_dir=directory / "calibration",
                                  cameras={"front": camera})  # fmt: skip
-    return save_fresh_policy(SO101Follower(config), "act", tmp_path / "act", device="cpu", **SMALL_ACT)
+    return save_fresh_policy(SO101Follower(config), "act", directory, device="cpu", **SMALL_ACT)
+
+
+@pytest.fixture
+def policy(tmp_path) -> Path:
+    return save_so101_act(tmp_path / "act")
 
 
 def operator(twin: Twin, *flags: str) -> subprocess.Popen:
