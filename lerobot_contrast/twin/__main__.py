@@ -4,13 +4,13 @@ print its endpoints and the flags to give eval, and run until Ctrl-C or SIGTERM.
 
 from __future__ import annotations
 
-import os
 import signal
 import sys
 import threading
 from collections.abc import Sequence
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.extras import require_extra
 from lerobot_contrast.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.twin.process import TwinConfig
 
@@ -18,8 +18,6 @@ USAGE = "python -m lerobot_contrast.twin [--flag=value | --flag value] ..."
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    # MuJoCo picks its GL backend when first imported (in Twin): offscreen through EGL, with or without a display.
-    os.environ.setdefault("MUJOCO_GL", "egl")
     argv = list(sys.argv[1:] if argv is None else argv)
     if wants_help(argv):
         print(usage_text(TwinConfig, USAGE))
@@ -28,6 +26,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for signum in (signal.SIGINT, signal.SIGTERM):  # set first: a Ctrl-C while starting still stops cleanly
         signal.signal(signum, lambda *_: stopping.set())
     try:
+        require_extra("twin", "python -m lerobot_contrast.twin")
         config = parse_config(TwinConfig, argv)
         from lerobot_contrast.twin.process import Twin  # after the flags: a typo is answered before MuJoCo loads
 

@@ -14,8 +14,6 @@ import numpy as np
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.twin.lens import Lens, LensArgs
 
-# Offscreen rendering without a display; Mesa's EGL renders on the CPU where there is no GPU.
-os.environ.setdefault("MUJOCO_GL", "egl")
 VIEW_HULL_VERTICES = 128  # the arm's links stay recognisable; their CAD meshes hold 320k triangles
 
 
