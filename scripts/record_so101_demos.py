@@ -4,6 +4,7 @@ same placements; an interrupted recording is resumed where it stopped by running
 
     python scripts/record_so101_demos.py --seed=0 --episodes=100 --output=DIR
         [--task="put the red cube in the left bin"] [--episode_time_s=12] [--reset_time_s=1] [--width=320 --height=240]
+        [--fps=30] [--pace=1.5] [--tries=5]
 
 Prints `episodes=.. frames=.. seconds_per_episode=..` last."""
 
@@ -37,6 +38,7 @@ def record_command(args: argparse.Namespace, twin, done: int) -> list[str]:
         f"--teleop.placement={twin.placement}",
         f"--teleop.seed={args.seed}",
         f"--teleop.first_episode={done}",
+        f"--teleop.pace={args.pace}",
         f"--dataset.repo_id={REPO_ID}",
         f"--dataset.root={args.output}",
         f"--dataset.single_task={args.task}",
@@ -70,12 +72,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--episode_time_s", type=float, default=12.0)
     parser.add_argument("--reset_time_s", type=float, default=1.0)
     parser.add_argument("--fps", type=int, default=30)
+    parser.add_argument("--pace", type=float, default=1.5, help="the demonstrator's motion times, times the planned")
     parser.add_argument("--width", type=int, default=320)
     parser.add_argument("--height", type=int, default=240)
     parser.add_argument("--tries", type=int, default=5, help="lerobot-record runs, each resuming, before giving up")
     args = parser.parse_args(argv)
-    if args.episodes < 1 or args.episode_time_s <= 0 or args.reset_time_s < 0:
-        parser.error("--episodes must be at least 1, --episode_time_s above 0 and --reset_time_s at least 0")
+    if args.episodes < 1 or args.episode_time_s <= 0 or args.reset_time_s < 0 or args.pace <= 0:
+        parser.error("--episodes must be at least 1, --episode_time_s and --pace above 0, --reset_time_s at least 0")
     if args.output.exists() and not (args.output / "meta" / "info.json").is_file():
         parser.error(f"--output={args.output} exists but holds no LeRobot dataset; give a new folder")
     return args

@@ -140,7 +140,7 @@ def test_lerobot_record_records_two_episodes_on_the_twin(tmp_path, task):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     record = load_script("record_so101_demos")
-    args = record.parse_args([f"--output={tmp_path / 'demos'}", "--episodes=2", "--reset_time_s=0.5",
+    args = record.parse_args([f"--output={tmp_path / 'demos'}", "--episodes=2", "--reset_time_s=0.5", "--episode_time_s=8", "--pace=1",
                               "--width=96", "--height=72", "--seed=5"])  # fmt: skip
     twin = start_twin(f"--calibration_dir={tmp_path}", f"--camera_port={free_port()}", f"--control_port={free_port()}",
                       "--width=96", "--height=72", "--seed=5")  # fmt: skip
@@ -152,7 +152,7 @@ def test_lerobot_record_records_two_episodes_on_the_twin(tmp_path, task):
     finally:
         twin.stop()
     dataset = LeRobotDataset(record.REPO_ID, root=tmp_path / "demos")
-    assert dataset.num_episodes == 2 and dataset.meta.robot_type == "so101_follower"
+    assert dataset.num_episodes == 2 and dataset.meta.robot_type == "so_follower"
     assert dataset.features["action"]["names"] == [f"{name}.pos" for name in arm.MOTOR_NAMES]
     assert dataset.features["observation.images.front"]["shape"] == (72, 96, 3)
     assert dataset[0]["task"] == INSTRUCTION
