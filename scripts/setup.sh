@@ -8,6 +8,7 @@ fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check \
   -e protocols/navigation_protocol \
   -e robots/lerobot_robot_locobot \
+  -e teleoperators/lerobot_teleoperator_so101_demo \
   -e policies/lerobot_policy_language_table \
   -e policies/lerobot_policy_tabletop_pointer \
   -e envs/lerobot_env_language_table \

@@ -18,6 +18,7 @@ DISTRIBUTIONS = (
     "lerobot_contrast",
     "navigation_protocol",
     "lerobot_robot_locobot",
+    "lerobot_teleoperator_so101_demo",
     "lerobot_policy_language_table",
     "lerobot_policy_tabletop_pointer",
     "lerobot_policy_vln_navigator",

@@ -16,7 +16,7 @@ import pytest
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("wheels")]
 
 ROOT = Path(__file__).resolve().parents[1]
-SIBLINGS = ("protocols", "robots", "policies", "envs")
+SIBLINGS = ("protocols", "robots", "teleoperators", "policies", "envs")
 DISTRIBUTIONS = [ROOT, *sorted(p.parent for p in ROOT.glob("*/*/pyproject.toml") if p.parts[-3] in SIBLINGS)]
 EXTRA_ONLY = ("ray", "accelerate", "wandb", "jax", "mkdocs", "pytest")
 # torch, torchvision and the CUDA libraries they bring (4.5 of the core's 6.2 GB) are this environment's own, linked
