@@ -3,8 +3,8 @@ project (the twin's bus runs in a child process); with --eval, then the evaluato
 30 Hz, the scripted operator, a random-weight ACT for the SO-101's features): the control loop's mean period, how
 often the staging camera flags cubes placed 4 cm and 0.5 cm off, and --cost=measured against the twin's truth.
 
-Figures last: connect_s=... reach_s=... (the slowest of the poses to within 2 degrees) sync_read_ms=...
-sync_write_ms=... write_ms=... project_code_loaded=false [period_ms=... flagged_4cm=... flagged_05cm=...
+Figures last: connect_s=... connect_failures=... (before the first connect that worked) reach_s=... (the slowest of the poses to within 2 degrees) sync_read_ms=...
+sync_write_ms=... write_ms=... lost_calls=... project_code_loaded=false [period_ms=... flagged_4cm=... flagged_05cm=...
 measured_cost_err_cm=...].
 
     .venv/bin/python scripts/bench_twin.py [--eval --instances=4]
@@ -56,13 +56,19 @@ def reach_seconds(robot: SO101Follower, pose: dict[str, float], timeout: float =
     sys.exit(f"bench_twin: pose {pose} not reached within {timeout} s (last reading {obs})")
 
 
+LOST: list[int] = [0]  # calls that failed after their retries: LeRobot's reply deadline missed three times
+
+
 def mean_ms(call, repeats: int) -> float:
     """Mean milliseconds per call; each retries twice, as `so101_follower` retries its reads (a busy machine can
-    make the twin miss LeRobot's 50 ms reply deadline now and then)."""
+    make the twin miss LeRobot's 50 ms reply deadline now and then); calls that fail even so are counted in LOST."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        call()
+        try:
+            call()
+        except ConnectionError:
+            LOST[0] += 1
         times.append(time.perf_counter() - start)
     return statistics.fmean(times) * 1e3
 
@@ -75,9 +81,18 @@ def confirmed_sync_write(bus, values: dict[str, int]) -> None:
 
 
 def measure(port: str, calibration_dir: Path, robot_id: str, repeats: int) -> dict[str, str]:
-    robot = SO101Follower(SO101FollowerConfig(port=port, id=robot_id, calibration_dir=calibration_dir))
-    start = time.perf_counter()
-    robot.connect()
+    failures = 0  # LeRobot does not retry a connect; a loaded machine can make the twin miss a reply
+    while True:
+        robot = SO101Follower(SO101FollowerConfig(port=port, id=robot_id, calibration_dir=calibration_dir))
+        start = time.perf_counter()
+        try:
+            robot.connect()
+            break
+        except (ConnectionError, RuntimeError):
+            robot.bus.port_handler.closePort()
+            failures += 1
+            if failures == 5:
+                sys.exit("bench_twin: 5 connects in a row failed")
     connect_s = time.perf_counter() - start
     reach_s = max(reach_seconds(robot, pose) for pose in POSES)
     bus = robot.bus
@@ -86,11 +101,13 @@ def measure(port: str, calibration_dir: Path, robot_id: str, repeats: int) -> di
     goals = itertools.cycle([there, here])  # two goals one step apart, so each write changes the registers
     figures = {
         "connect_s": f"{connect_s:.3f}",
+        "connect_failures": str(failures),
         "reach_s": f"{reach_s:.3f}",
         "sync_read_ms": f"{mean_ms(lambda: bus.sync_read('Present_Position', num_retry=2), repeats):.3f}",
         "sync_write_ms": f"{mean_ms(lambda: confirmed_sync_write(bus, next(goals)), repeats):.3f}",
         "write_ms": f"{mean_ms(lambda: bus.write('Goal_Position', 'gripper', here['gripper'], normalize=False, num_retry=2), repeats):.3f}",
     }
+    figures["lost_calls"] = str(LOST[0])
     robot.disconnect()
     return figures
 
