@@ -137,6 +137,11 @@ def eval_figures(work: Path, instances: int) -> dict[str, str]:
         flags = next(shlex.split(line[12:]) for line in twin.stdout if line.startswith("eval flags: "))
         policy = save_act(work / "act")
         placement = f"tcp://127.0.0.1:{control}"
+        from lerobot_contrast.domains.task_file import load_task_file
+        from lerobot_contrast.twin.scene import start_poses
+
+        for name, pose in start_poses(load_task_file("so101_blocks").spec, None).items():  # clear the board's place
+            ask(placement, {"cmd": "place", "object": name, "x": pose.x, "y": pose.y})
         ask(placement, {"cmd": "board", "x": 0.30, "y": 0.0, "yaw_deg": 0})
         table = work / "table.calibration.json"
         calibrate = [python, "-m", "lerobot_contrast.calibrate", "--task=so101_blocks", "--board.x=0.30",
@@ -203,6 +208,9 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=300, help="calls per latency figure")
     parser.add_argument("--eval", action="store_true", help="then time the evaluator on the whole twin")
     parser.add_argument("--instances", type=int, default=4, help="trials per staging figure (--eval)")
+    parser.add_argument(
+        "--work", type=Path, default=None, help="keep the --eval runs here (default: a temporary folder)"
+    )
     args = parser.parse_args()
     spawn = multiprocessing.get_context("spawn")
     ports, stop = spawn.Queue(), spawn.Event()
@@ -215,7 +223,9 @@ def main() -> None:
             stop.set()
             child.join(timeout=10)
     figures["project_code_loaded"] = str(any(m.startswith("lerobot_contrast") for m in sys.modules)).lower()
-    if args.eval:
+    if args.eval and args.work is not None:
+        figures |= eval_figures(args.work, args.instances)
+    elif args.eval:
         with tempfile.TemporaryDirectory() as work:
             figures |= eval_figures(Path(work), args.instances)
     print(" ".join(f"{name}={value}" for name, value in figures.items()))
