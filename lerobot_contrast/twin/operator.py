@@ -14,6 +14,7 @@ import os
 import re
 import subprocess
 import sys
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -25,6 +26,9 @@ from lerobot_contrast.contrast.scene import Pose, Scene
 
 DEFAULT_PLACEMENT = "tcp://127.0.0.1:5556"
 REPLY_TIMEOUT_MS = 5000
+# After placing, wait as a person's hands leave the table: the camera's latest frame is up to a few frames old, and
+# the staging check reads it at Enter (measured on the twin: the frame read at once still showed the old pose).
+SETTLE_S = 0.5
 WHERE = r"\((?:off the workspace|[+-]\d+\.\d+, [+-]\d+\.\d+)\)"
 TRIAL = re.compile(r"trial (\d+)/(\d+) · ")
 MOVE = re.compile(rf"^\W*(\w+)\s*[│|]\s*({WHERE})\s*[│|]\s*({WHERE})\s*[│|]")
@@ -190,6 +194,8 @@ class Operator:
             self.placement.place(name, target[0] + dx, target[1] + dy)
             self.said.append(f"placed {name} {np.hypot(dx, dy) * 100:.1f} cm from its target")
             self.placed.append({"trial": self.index, "object": name, "target": target, "offset": [dx, dy]})
+        if targets:
+            time.sleep(SETTLE_S)
 
 
 def run_eval(eval_argv: Sequence[str], operator: Operator) -> int:
