@@ -157,6 +157,8 @@ def eval_figures(work: Path, instances: int) -> dict[str, str]:
                        "--max_episode_s=3", "--cost=measured", f"--staging.calibration={table}",
                        "--staging.viewer=none", f"--output_dir={run_dir}"]  # fmt: skip
             said = subprocess.run(command, capture_output=True, text=True, env={**os.environ}).stdout
+            if not (run_dir / "journal.jsonl").is_file():
+                sys.exit(f"bench_twin: the evaluation on the twin did not run: {said.strip().splitlines()[-1:]}")
             records = [json.loads(line) for line in (run_dir / "journal.jsonl").read_text().splitlines()]
             placed, flagged = 0, 0
             for record, trial in zip(records, re.split(r"trial \d+/\d+ · ", said)[1:], strict=False):
