@@ -116,13 +116,21 @@ class SO101Demo(Teleoperator):
         try:
             steps = plan.waypoints(self.model, self.predicate, poses, self.task.spec)
         except reach.Unreachable as error:
-            logging.warning("so101_demo: episode left at rest: %s", error)
+            where = {name: [round(value, 3) for value in pose] for name, pose in poses.items()}
+            logging.warning("so101_demo: episode left at rest: %s; the objects (x, y, z, yaw): %s", error, where)
             steps = []
         end, self._schedule = 0.0, []
         for step in steps:
             end += step.seconds * self.config.pace
             self._schedule.append((end, dict(step.goals)))
         self._start, self._placed = now, False
+        if self.schedule_s > self.episode_time_s:
+            logging.warning(
+                "so101_demo: the motion takes %.1f s, longer than the %.1f s episode: give a longer "
+                "--dataset.episode_time_s or a smaller --teleop.pace",
+                self.schedule_s,
+                self.episode_time_s,
+            )
 
     @property
     def schedule_s(self) -> float:
