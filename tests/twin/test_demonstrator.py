@@ -81,16 +81,6 @@ def test_next_to_targets_lie_beside_the_base_within_the_goal(task):
     assert spots and all(math.dist(spot, bin_.center) > bin_.radius + 0.03 for spot in spots)
 
 
-def test_beside_the_base_the_jaws_let_go_across_the_line_to_it(task):
-    # A placement where letting go with the jaws along the line to the base, wide open, pushed the base 2 cm away.
-    poses = {"red_cube": (0.361, -0.07, 0.015, -0.474), "green_cube": (0.204, 0.033, 0.015, -0.372),
-             "blue_cube": (0.302, -0.034, 0.015, -0.037), "yellow_cube": (0.53, 0.35, 0.015, 0.0)}  # fmt: skip
-    goal = plan.goal_of(task, "put the blue cube next to the red cube")
-    model = plan.arm_model(task.spec)
-    steps = {step.label: step for step in plan.waypoints(model, goal, poses, task.spec)}
-    assert plan.jaws_towards(model, steps["lower"].goals, poses["red_cube"][:2]) < 0.5
-
-
 def where(server, names) -> list[float]:
     """The objects' x, y on the twin, in the order of `names`."""
     objects = server.answer(b'{"cmd": "scene"}')["objects"]

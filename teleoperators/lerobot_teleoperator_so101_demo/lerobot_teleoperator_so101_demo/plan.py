@@ -17,8 +17,7 @@ from lerobot_contrast.domains.task_file.world import sample_scene
 from lerobot_contrast.twin import arm, reach
 from lerobot_contrast.twin.scene import build_spec, is_bin, object_sizes
 
-NEAR_GAP = 0.009  # m between the faces of an object put next to another: room for where it lands, within the goal
-ACROSS_ENOUGH = 0.7  # |cos| of the angle between the jaws' closing line and the line to the base: at least 45 deg off
+NEAR_GAP = 0.012  # m between the faces of an object put next to another: room for where it lands, within the goal
 BIN_INSETS = (0.0, 0.015, 0.03)  # m towards the arm from a bin's middle, tried in turn when the middle is unreachable
 
 
@@ -82,47 +81,16 @@ def ik_seeds(x: float, y: float) -> list[dict[str, float]]:
     return [dict(arm.REST), {**arm.REST, "shoulder_pan": math.atan2(y, x)}]
 
 
-def jaws_towards(model: mujoco.MjModel, goals: Mapping[str, float], base: tuple[float, float]) -> float:
-    """How nearly the jaws close along the line to `base` with the arm at `goals` (|cos|: 0 across it, 1 along it):
-    along it, one jaw comes down between the object and the base and pushes the base away."""
-    data = mujoco.MjData(model)
-    for name in reach.ARM_JOINTS:
-        data.qpos[model.joint(name).qposadr[0]] = goals[name]
-    mujoco.mj_kinematics(model, data)
-    site = data.site(reach.SITE)
-    closing = site.xmat.reshape(3, 3)[:2, 2]
-    towards = np.array(base) - site.xpos[:2]
-    return float(abs(closing @ towards) / (np.linalg.norm(closing) * np.linalg.norm(towards) + 1e-9))
-
-
-def _plans(model, subject_pose, size, spots) -> list[list[reach.Waypoint]]:
-    found = []
-    for target in spots:
-        for seed in ik_seeds(*subject_pose[:2]):
-            try:
-                found.append(reach.pick_and_place(model, seed, subject_pose, size, target))
-                break
-            except reach.Unreachable:
-                continue
-    return found
-
-
 def waypoints(model: mujoco.MjModel, predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec):
-    """The pick-and-place joint goals from rest: into a bin at the first reachable point, or beside the base where
-    the jaws let go across the line to it; Unreachable when no target is reachable."""
+    """The pick-and-place joint goals from rest for the first reachable target; Unreachable when none is."""
     subject = predicate["subject"]
     size = object_sizes(spec)[subject]
-    found = _plans(model, poses[subject], size, targets(predicate, poses, spec))
-    if not found:
-        raise reach.Unreachable(f"no reachable place to put {subject} for {predicate}")
-    if "in" in predicate:
-        return found[0]
-    base = poses[predicate["near"]][:2]
-    along = [jaws_towards(model, {s.label: s for s in steps}["lower"].goals, base) for steps in found]
-    # The nearest spot whose jaws let go across the line to the base (a far spot adds to the carry), else the best.
-    return next(
-        (steps for steps, a in zip(found, along, strict=True) if a < ACROSS_ENOUGH), found[along.index(min(along))]
-    )
+    for target, seed in itertools.product(targets(predicate, poses, spec), ik_seeds(*poses[subject][:2])):
+        try:
+            return reach.pick_and_place(model, seed, poses[subject], size, target)
+        except reach.Unreachable:
+            continue
+    raise reach.Unreachable(f"no reachable place to put {subject} for {predicate}")
 
 
 def placement(spec: TaskSpec, seed: int, episode: int) -> dict[str, tuple[float, float, float]]:
