@@ -68,7 +68,15 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
         return run_and_report(cfg, equipped(cfg, planned, robot, policy, operator))
     finally:
         if robot.is_connected:
-            robot.disconnect()
+            from lerobot_contrast.runner import release
+
+            # A lost robot cannot disconnect cleanly (its servos do not answer): one line after the error, no traceback.
+            failed = release(robot)
+            if failed is not None:
+                print(
+                    f"the robot ({robot.name}) did not disconnect cleanly: {' '.join(str(failed).split())}",
+                    file=sys.stderr,
+                )
 
 
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:

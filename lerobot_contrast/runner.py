@@ -26,6 +26,11 @@ from lerobot_contrast.operator_console import Label, OperatorConsole, SessionSto
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver
 
+try:
+    from termios import error as TermiosError
+except ImportError:  # no termios (Windows): pyserial raises its SerialException, an OSError, there
+    TermiosError = OSError
+
 if TYPE_CHECKING:
     from lerobot.robots import Robot
 
@@ -35,10 +40,18 @@ if TYPE_CHECKING:
 ABORTS = ("estop", "disconnected")
 # The shortest pause between two tries to reconnect a lost robot.
 RETRY_S = 0.5
+# What a robot's own calls raise once its link is gone: a dropped network (ConnectionError, TimeoutError) or an
+# unplugged serial adapter (pyserial's SerialException is an OSError; termios.error is not one).
+LINK_ERRORS = (OSError, TermiosError)
 
 
 class RobotLostError(UserError):
     pass
+
+
+class _LinkLost(Exception):
+    """A robot's own call failed with one of LINK_ERRORS (its `__cause__`); raised only around the robot's calls, so
+    that an OSError from our own files (a full disk) is never taken for a lost robot."""
 
 
 @dataclass
@@ -177,20 +190,20 @@ class RobotRunner:
         if self.operator is not None:
             self.operator.running()
         start = time.perf_counter()
-        steps, path, ended_by = 0, [], "max_steps"
+        steps, path, ended_by, observation = 0, [], "max_steps", None
         try:
-            observation = self.robot.get_observation()
+            observation = _robot_call(self.robot.get_observation)
             self._extend(path, observation)
             while steps < self.max_steps:
                 tick = time.perf_counter()
                 ended_by = self._interrupted(tick - start, observation)
                 if ended_by is not None:
                     break
-                sent = self.robot.send_action((yield observation))
+                sent = _robot_call(self.robot.send_action, (yield observation))
                 for observer in self.observers:
                     observer.step(tick - start, observation, sent)
                 steps += 1
-                observation = self.robot.get_observation()
+                observation = _robot_call(self.robot.get_observation)
                 self._extend(path, observation)
                 ended_by = self._finished(context)
                 if ended_by is not None:
@@ -198,9 +211,9 @@ class RobotRunner:
                 precise_sleep(self.period - (time.perf_counter() - tick))
             else:
                 ended_by = "max_steps"
-        except (ConnectionError, TimeoutError) as error:
+        except _LinkLost as lost:
             ended_by = "disconnected"
-            self._recover(error)
+            self._recover(lost.__cause__, observation)
         return Episode(steps, path, time.perf_counter() - start, ended_by)
 
     def _interrupted(self, elapsed: float, observation: dict[str, Any]) -> str | None:
@@ -215,7 +228,7 @@ class RobotRunner:
         # A policy (or a robot, for a discrete "stop" action) can end its own episode, as VLN agents do.
         if getattr(self.policy, "done", False) or getattr(self.robot, "stop_requested", False):
             return "policy"
-        if self.stop_on_goal and self.task.is_achieved(context.instance, read_scene(self.robot)):
+        if self.stop_on_goal and self.task.is_achieved(context.instance, _robot_call(read_scene, self.robot)):
             return "predicate"
         return None
 
@@ -224,21 +237,25 @@ class RobotRunner:
             x, y = self.pose_keys
             path.append(Pose(float(observation[x]), float(observation[y])))
 
-    def _hold(self, observation: dict[str, Any]) -> None:
-        """Stop at once: zero every velocity or delta, and hold every position where it is now."""
-        hold = {
-            key: float(observation[key]) if key.endswith(".pos") and key in observation else 0.0
-            for key in self.robot.action_features
-        }
-        self.robot.send_action(hold)
+    def _hold(self, observation: dict[str, Any] | None) -> None:
+        """Stop at once: zero every velocity or delta, and hold every position where it was last observed. Where a
+        position was never observed, nothing is safe to send (a 0 would drive that joint to 0 degrees)."""
+        hold = {}
+        for key in self.robot.action_features:
+            if not key.endswith(".pos"):
+                hold[key] = 0.0
+            elif observation is not None and key in observation:
+                hold[key] = float(observation[key])
+            else:
+                return
+        _robot_call(self.robot.send_action, hold)
 
-    def _recover(self, error: Exception) -> None:
+    def _recover(self, error: Exception, observation: dict[str, Any] | None) -> None:
         """After a lost connection: try to stop the robot, then to reconnect; record why not if it fails."""
         # The link is probably down already; these are best effort, reconnecting is what matters.
         with suppress(Exception):
-            self.robot.send_action(dict.fromkeys(self.robot.action_features, 0.0))
-        with suppress(Exception):
-            self.robot.disconnect()
+            self._hold(observation)
+        release(self.robot)
         if self.say is not None:
             self.say(
                 f"the robot ({self.robot.name}) disconnected ({' '.join(str(error).split())}); "
@@ -251,6 +268,7 @@ class RobotRunner:
                 return
             except Exception as reconnect_error:
                 error = reconnect_error
+                _close_parts(self.robot)  # what the failed connect opened, or the next one is refused
             wait = max(self.period, RETRY_S)
             if time.monotonic() + wait > deadline:
                 break
@@ -351,6 +369,44 @@ def drive(trial: Generator[dict[str, Any], dict[str, Any], Outcome], act: Callab
             observation = trial.send(action)
     except StopIteration as end:
         return end.value
+
+
+def _robot_call(call: Callable[..., Any], *args: Any) -> Any:
+    try:
+        return call(*args)
+    except LINK_ERRORS as error:
+        raise _LinkLost() from error
+
+
+def release(robot: Robot) -> Exception | None:
+    """Disconnect a robot, lost or not, as far as it goes; returns why its `disconnect()` failed, if it did."""
+    try:
+        robot.disconnect()
+        return None
+    except Exception as error:
+        _close_parts(robot)
+        return error
+
+
+def _close_parts(robot: Robot) -> None:
+    """Close the bus and cameras a robot left open. LeRobot's robots count themselves connected while their bus port is
+    open, and a failed `disconnect()` (servos that no longer answer to have their torque disabled) or `connect()` (a
+    handshake unanswered) leaves it open, so every `connect()` after it would refuse with "already connected"."""
+    bus = getattr(robot, "bus", None)
+    if _connected(bus):
+        with suppress(Exception):
+            bus.disconnect(disable_torque=False)  # a MotorsBus: only closes its port
+    for camera in getattr(robot, "cameras", {}).values():
+        if _connected(camera):
+            with suppress(Exception):
+                camera.disconnect()
+
+
+def _connected(device: Any) -> bool:
+    try:
+        return bool(device is not None and device.is_connected)
+    except Exception:  # a device too broken to say is treated as closed: connect() will tell
+        return False
 
 
 def _skipped(context: TrialContext) -> Outcome:
