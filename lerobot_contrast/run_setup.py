@@ -158,8 +158,10 @@ def connect(robot: Robot) -> None:
     try:
         robot.connect()
     except Exception as error:
+        # The type the user gave (so101_follower), not the class's name, which LeRobot shares (so_follower).
+        given = getattr(getattr(robot, "config", None), "type", robot.name)
         raise ConfigError(
-            f"--robot.type={robot.name}: cannot connect ({' '.join(str(error).split())}); "
+            f"--robot.type={given}: cannot connect ({' '.join(str(error).split())}); "
             "check that it is powered and reachable, and its --robot.* settings"
         ) from None
 

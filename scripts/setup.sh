@@ -5,6 +5,9 @@ cd "$(dirname "$0")/.."
 if [ ! -x .venv/bin/python ]; then
   "${PYTHON:-python3.12}" -m venv .venv
 fi
+# pip 23.2 (Python 3.12.1's) cannot resolve a sibling's requirement on lerobot_contrast beside `-e '.[dev]'` (an
+# extra of a project from a local folder, in the same command): a newer pip first.
+.venv/bin/python -m pip install --quiet --disable-pip-version-check --upgrade 'pip>=24'
 .venv/bin/python -m pip install --quiet --disable-pip-version-check \
   -e protocols/navigation_protocol \
   -e robots/lerobot_robot_locobot \
