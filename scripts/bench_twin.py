@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import math
 import multiprocessing
 import statistics
 import sys
@@ -170,11 +171,25 @@ def eval_figures(work: Path, instances: int) -> dict[str, str]:
             truth = [float(x) for x in re.findall(r"\[operator\] moved (\d+\.\d+) m", said)]
             errors = [abs(r["extra"]["staging"]["moved_m"] - t) for r, t in zip(records, truth, strict=False)]
             figures[f"measured_cost_err_cm_{name[8:]}"] = f"{max(errors, default=float('nan')) * 100:.2f}"
+            cubes = re.findall(r"\[operator\] moved [\d.]+ m \(the twin's truth: ([^)]*)\)", said)
+            each = [cube_errors(r["extra"]["staging"], t) for r, t in zip(records, cubes, strict=False)]
+            figures[f"measured_cube_err_cm_{name[8:]}"] = f"{max(sum(each, []), default=float('nan')) * 100:.2f}"
         figures["period_ms"] = f"{statistics.fmean(periods) * 1e3:.1f}"
         return figures
     finally:
         twin.terminate()
         twin.wait(timeout=30)
+
+
+def cube_errors(staging: dict, truth: str) -> list[float]:
+    """Per object the twin says moved: how far the camera's measured move is from it (m)."""
+    errors = []
+    for item in filter(None, truth.split(", ")):
+        name, distance = item.rsplit(" ", 1)
+        if name in staging["placed"] and name in staging["before"]:
+            (x0, y0, *_), (x1, y1) = staging["before"][name], staging["placed"][name]
+            errors.append(abs(math.hypot(x1 - x0, y1 - y0) - float(distance)))
+    return errors
 
 
 def save_act(directory: Path) -> Path:

@@ -167,8 +167,9 @@ class Operator:
             before = self.placement.scene()
             self._place(self.moves)
             after = self.placement.scene()
-            moved = sum(pose.distance_to(after.objects[name]) for name, pose in before.objects.items())
-            self.said.append(f"moved {moved:.3f} m (the twin's truth)")
+            moved = {name: pose.distance_to(after.objects[name]) for name, pose in before.objects.items()}
+            each = ", ".join(f"{name} {distance:.3f}" for name, distance in moved.items() if distance > 0.001)
+            self.said.append(f"moved {sum(moved.values()):.3f} m (the twin's truth: {each})")
             return ""
         elif CHECK_PROMPT in line:
             if self.on_flagged == "fix" and self.fixes < 2:
