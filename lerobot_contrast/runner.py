@@ -389,17 +389,15 @@ def release(robot: Robot) -> Exception | None:
 
 
 def _close_parts(robot: Robot) -> None:
-    """Close the bus and cameras a robot left open. LeRobot's robots count themselves connected while their bus port is
+    """Close the bus port a robot left open. LeRobot's robots count themselves connected while their bus port is
     open, and a failed `disconnect()` (servos that no longer answer to have their torque disabled) or `connect()` (a
-    handshake unanswered) leaves it open, so every `connect()` after it would refuse with "already connected"."""
+    handshake unanswered) leaves it open, so every `connect()` after it would refuse with "already connected".
+    Cameras are left alone: closing LeRobot's zmq camera while its read thread still waits on the socket aborts the
+    process inside libzmq (seen on the twin), which would lose the session's last words."""
     bus = getattr(robot, "bus", None)
     if _connected(bus):
         with suppress(Exception):
             bus.disconnect(disable_torque=False)  # a MotorsBus: only closes its port
-    for camera in getattr(robot, "cameras", {}).values():
-        if _connected(camera):
-            with suppress(Exception):
-                camera.disconnect()
 
 
 def _connected(device: Any) -> bool:

