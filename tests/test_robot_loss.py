@@ -136,7 +136,7 @@ def test_an_unplugged_arm_aborts_the_trial_and_reconnects_once_it_has_power(erro
 
 
 def test_an_arm_that_stays_unplugged_halts_the_session_with_one_clear_error():
-    arm = Arm(unplug_at=3, power_back_at=99)
+    arm = Arm(unplug_at=3, power_back_at=10**9)  # never: with 10 ms retries, 1 s holds about 100 connects
     robot_runner, outcome = trial(arm)
     assert outcome.status == "aborted" and not arm.is_connected  # closed, so a later connect is not refused
     assert "could not reconnect within 1 s (Could not connect on port '/dev/ttyACM0')" in str(robot_runner.halted)
