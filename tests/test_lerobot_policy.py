@@ -187,22 +187,46 @@ def test_a_policy_whose_state_does_not_fit_the_robot_is_refused_before_the_run_d
     assert not run.exists()
 
 
-def test_images_of_another_size_are_refused_unless_the_policy_resizes_them():
+def test_images_of_another_size_are_resized_when_the_view_is_the_same_and_refused_otherwise():
     from lerobot.configs.types import FeatureType, PolicyFeature
     from lerobot.policies import make_policy_config
+    from lerobot.utils.import_utils import register_third_party_plugins
 
     from lerobot_contrast.policies.pretrained import _check_inputs, robot_dataset_features
 
+    register_third_party_plugins()  # tabletop_pointer, as every lerobot-* command finds it
     features = robot_dataset_features(LanguageTableSim(LanguageTableSimConfig()))  # a 180x320 camera
     small = {
         "observation.images.top": PolicyFeature(type=FeatureType.VISUAL, shape=(3, 72, 128)),
         "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(4,)),
     }
     pointer = make_policy_config("tabletop_pointer", input_features=dict(small))  # resizes any frame to 72x128
-    _check_inputs(pointer, features, {})
-    act = make_policy_config("act", input_features=dict(small))
-    with pytest.raises(PolicyLoadError, match=r"observation.images.top has shape \(3, 72, 128\).*\(3, 180, 320\)"):
-        _check_inputs(act, features, {})
+    assert _check_inputs(pointer, features, {}) == {}
+    act = make_policy_config("act", input_features=dict(small))  # the same 16:9 view, smaller: the evaluator scales
+    assert _check_inputs(act, features, {}) == {"observation.images.top": (72, 128)}
+    square = {**small, "observation.images.top": PolicyFeature(type=FeatureType.VISUAL, shape=(3, 72, 72))}
+    with pytest.raises(PolicyLoadError, match=r"observation.images.top has shape \(3, 72, 72\).*\(3, 180, 320\)"):
+        _check_inputs(make_policy_config("act", input_features=square), features, {})
     grey = {**small, "observation.images.top": PolicyFeature(type=FeatureType.VISUAL, shape=(1, 72, 128))}
     with pytest.raises(PolicyLoadError, match=r"\(1, 72, 128\)"):
         _check_inputs(make_policy_config("tabletop_pointer", input_features=grey), features, {})
+
+
+def test_an_act_trained_on_smaller_frames_sees_the_camera_scaled_to_its_size(tmp_path, capsys):
+    policy = save_act(tmp_path / "act_small")
+    config = json.loads((policy / "config.json").read_text())
+    config["input_features"]["observation.images.top"]["shape"] = [3, 90, 160]
+    (policy / "config.json").write_text(json.dumps(config))
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    loaded = PretrainedPolicy(robot, path=str(policy))
+    assert "observation.images.top frames of 320x180 are resized to 160x90" in capsys.readouterr().out
+    seen, select_action = [], loaded.policy.select_action
+    loaded.policy.select_action = lambda batch: (
+        seen.append(batch["observation.images.top"].shape) or select_action(batch)
+    )
+    robot.connect()
+    try:
+        loaded.act(robot.get_observation())
+    finally:
+        robot.disconnect()
+    assert [tuple(shape) for shape in seen] == [(1, 3, 90, 160)]

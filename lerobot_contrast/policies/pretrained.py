@@ -14,6 +14,7 @@ from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import cv2
 import numpy as np
 import torch
 from lerobot.common.control_utils import predict_action
@@ -117,7 +118,11 @@ def _check_rename_map(config: PreTrainedConfig, features: dict[str, dict], renam
             )
 
 
-def _check_inputs(config: PreTrainedConfig, features: dict[str, dict], rename_map: Mapping[str, str]) -> None:
+def _check_inputs(
+    config: PreTrainedConfig, features: dict[str, dict], rename_map: Mapping[str, str]
+) -> dict[str, tuple[int, int]]:
+    """Refuse inputs the robot cannot give; return the camera frames the evaluator resizes for the policy (the
+    robot's key: the policy's height and width)."""
     _check_rename_map(config, features, rename_map)
     provided = {rename_map.get(key, key) for key in features if key != "action"}
     missing = sorted(set(config.input_features) - provided)
@@ -131,14 +136,27 @@ def _check_inputs(config: PreTrainedConfig, features: dict[str, dict], rename_ma
             '--rename_map=\'{"observation.images.ROBOT_CAMERA": "POLICY_KEY"}\''
         )
     given = {rename_map.get(key, key): feature for key, feature in dataset_to_policy_features(features).items()}
+    robot_key = {rename_map.get(key, key): key for key in features}
+    resized = {}
     for key, wanted in config.input_features.items():
         expected, actual = tuple(wanted.shape), tuple(given[key].shape)
         if expected == actual or (wanted.type is FeatureType.VISUAL and _resizes(config, expected, actual)):
             continue
+        if wanted.type is FeatureType.VISUAL and _same_view(expected, actual):
+            resized[robot_key[key]] = (expected[1], expected[2])
+            continue
         raise PolicyLoadError(
             f"the policy's {key} has shape {expected} but the robot gives {actual}; "
-            "use a policy trained on this robot's features"
+            "use a policy trained on this robot's features, or set the camera to the policy's size or aspect ratio"
         )
+    return resized
+
+
+def _same_view(expected: tuple[int, ...], actual: tuple[int, ...]) -> bool:
+    """Same channels and the same aspect ratio (within 1 %): the camera's frame, scaled, is the policy's view."""
+    if not (len(expected) == len(actual) == 3 and expected[0] == actual[0]):
+        return False
+    return abs(expected[1] * actual[2] - actual[1] * expected[2]) <= 0.01 * expected[1] * actual[2]
 
 
 # Config fields by which a policy declares the image size it resizes any frame to before its network sees it.
@@ -182,7 +200,10 @@ class PretrainedPolicy:
             config = _load_config(path, device)
         else:
             config = _fresh_config(str(policy_type), device, self.features)
-        _check_inputs(config, self.features, rename_map)
+        self.resized = _check_inputs(config, self.features, rename_map)
+        for key, (height, width) in self.resized.items():
+            shape = self.features[key]["shape"]
+            print(f"policy: {key} frames of {shape[1]}x{shape[0]} are resized to {width}x{height}, the policy's size")
         self.policy = _build_policy(config, path)
         self.policy.to(config.device).eval()
         overrides = {"device_processor": {"device": str(config.device)}}
@@ -214,9 +235,8 @@ class PretrainedPolicy:
     def act(self, observation: Mapping[str, Any]) -> dict[str, float]:
         if self.batches_lanes:  # the lanes' own path, so one lane and many give the same actions
             return self.act_lanes([observation], [self.instruction], [self.memory])[0]
-        frame = build_dataset_frame(self.features, dict(observation), prefix="observation")
         action = predict_action(
-            frame,
+            self._frame(observation),
             self.policy,
             self.device,
             self.preprocessor,
@@ -226,6 +246,14 @@ class PretrainedPolicy:
             robot_type=self.robot_type,
         )
         return make_robot_action(action, self.features)
+
+    def _frame(self, observation: Mapping[str, Any]) -> dict[str, Any]:
+        """The observation as LeRobot's dataset frame, its camera frames at the policy's size (area averaging, as a
+        camera set to that size would bin its pixels)."""
+        frame = build_dataset_frame(self.features, dict(observation), prefix="observation")
+        for key, (height, width) in self.resized.items():
+            frame[key] = cv2.resize(frame[key], (width, height), interpolation=cv2.INTER_AREA)
+        return frame
 
     def lane_twin(self) -> PretrainedPolicy:
         """The same network behind processors of its own, to answer other lanes from another thread (a processor
@@ -239,7 +267,7 @@ class PretrainedPolicy:
     ) -> list[dict[str, float]]:
         """One control step of several episodes in one call of the policy's `lane_step`: frames are batched on the
         CPU and reach the policy's device in one transfer; `memories[i]` is episode i's own state."""
-        frames = [build_dataset_frame(self.features, dict(obs), prefix="observation") for obs in observations]
+        frames = [self._frame(observation) for observation in observations]
         batch: dict[str, Any] = {key: _stacked([frame[key] for frame in frames], key) for key in frames[0]}
         batch["task"], batch["robot_type"] = list(instructions), self.robot_type
         amp = self.device.type == "cuda" and self.use_amp
