@@ -87,7 +87,7 @@ def task_from_dict(
     mode, reference = parse_outcome(root.get("outcome"), UNITS[workspace.units])
     world = World(workspace, objects, mode, reference)
     templates = parse_templates(root.get("templates"), world)
-    instances, seed = _evaluation_set(root, templates, world)
+    instances, seed, base_slots = _evaluation_set(root, templates, world)
     spec = TaskSpec(
         name=name,
         source=source,
@@ -100,6 +100,7 @@ def task_from_dict(
         outcome=mode,
         perturbations=(),
         cost=parse_cost(root.get("cost"), workspace, objects),
+        base_slots=base_slots,
     )
     if instances is None:
         _check_sampling(root, spec)
@@ -120,19 +121,37 @@ def _name(root: Node, source: str, default: str | None) -> str:
 
 
 def _evaluation_set(root: Node, templates, world: World):
-    """Listed instances (None when sampling) and the sampler's seed."""
+    """Listed instances (None when sampling), the sampler's seed and the slots every sampled base fixes."""
     listed, sampler = root.get("instances"), root.get("sampler")
     if listed is not None:
         if sampler is not None:
             sampler.fail("give either `instances:` (a listed evaluation set) or `sampler:`, not both")
-        return parse_instances(listed, templates, world), None
+        return parse_instances(listed, templates, world), None, {}
     if not templates:
         root.fail("missing key 'templates' (to sample instances from) or 'instances' (to list them)")
     if sampler is None:
-        return None, None
-    sampler.check_keys(("seed",))
+        return None, None, {}
+    sampler.check_keys(("seed", "slots"))
     seed = sampler.get("seed")
-    return None, None if seed is None else seed.integer(minimum=0)
+    return None, None if seed is None else seed.integer(minimum=0), _base_slots(sampler.get("slots"), templates)
+
+
+def _base_slots(node: Node | None, templates) -> dict[str, str]:
+    """sampler.slots: the value each named slot takes in every sampled base (perturbations may still change it)."""
+    if node is None:
+        return {}
+    fixed = {name: child.text() for name, child in node.items()}
+    for name, child in node.items():
+        allowed = sorted({c for t in templates.values() if name in t.slots for c in t.slots[name].candidates})
+        if not allowed:
+            child.fail(
+                f"no template has a slot {name!r}; slots: {', '.join(sorted({s for t in templates.values() for s in t.slots}))}"
+            )
+        if fixed[name] not in allowed:
+            child.fail(f"{fixed[name]!r} is not allowed in slot {name!r}; expected one of: {', '.join(allowed)}")
+    if not any(all(n in t.slots and v in t.slots[n].candidates for n, v in fixed.items()) for t in templates.values()):
+        node.fail("no single template has all these slots with these values; fix fewer slots")
+    return fixed
 
 
 def _check_sampling(root: Node, spec: TaskSpec) -> None:
@@ -147,7 +166,9 @@ def _check_sampling(root: Node, spec: TaskSpec) -> None:
         )
     task = FileTask(spec)
     for node, template in zip(root.get("templates").elements(), spec.templates.values(), strict=True):
-        if not any(task.try_template(template, "check", rng) for _ in range(FEASIBILITY_TRIES)):
+        if spec.fits_bases(template) and not any(
+            task.try_template(template, "check", rng) for _ in range(FEASIBILITY_TRIES)
+        ):
             node.fail(
                 f"template {template.key!r} never gives a valid instance: its goal already holds in every sampled "
                 "scene, or a slot has no candidate present; check the goal and the objects' areas"

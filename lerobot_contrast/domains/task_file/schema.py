@@ -137,6 +137,12 @@ class TaskSpec:
     outcome: str
     perturbations: tuple[PerturbationSpec, ...]
     cost: CostSpec
+    base_slots: Mapping[str, str] = field(default_factory=dict)  # sampler.slots: what every sampled base says
+
+    def fits_bases(self, template: Template) -> bool:
+        """Whether `template` can give a base with every slot `sampler.slots` fixes."""
+        return all(name in template.slots and value in template.slots[name].candidates
+                   for name, value in self.base_slots.items())  # fmt: skip
 
     def words(self, name: str) -> tuple[str, ...]:
         """How the instructions may refer to an object or region; the first is the plain one."""

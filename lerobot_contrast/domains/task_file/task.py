@@ -119,7 +119,12 @@ class FileTask(Task):
         )
 
     def _sample_one(self, id: str, rng: np.random.Generator) -> Instance:
-        templates = [t for t in self.spec.templates.values() if t.family in self.families]
+        templates = [t for t in self.spec.templates.values() if t.family in self.families and self.spec.fits_bases(t)]
+        if not templates:
+            raise UserError(
+                f"--families: no template of {', '.join(self.families)} gives the bases {self.spec.source}'s "
+                "sampler.slots fixes; choose other families"
+            )
         weights = np.array([t.weight for t in templates])
         for _ in range(SAMPLE_TRIES):
             template = templates[int(rng.choice(len(templates), p=weights / weights.sum()))]
@@ -138,6 +143,8 @@ class FileTask(Task):
         slots, used = {}, set()
         for name, slot in template.slots.items():
             options = [c for c in slot.candidates if c not in used and (slot.kind == "region" or c in scene.objects)]
+            if name in self.spec.base_slots:
+                options = [c for c in options if c == self.spec.base_slots[name]]
             if not options:
                 return None
             slots[name] = pick(rng, options)

@@ -17,7 +17,7 @@ from lerobot_contrast.domains import load_task
 from lerobot_contrast.domains.task_file import example_names, examples_dir, load_task_file
 from tests.domains.task_file.task_file_fixtures import CUPS, LISTED, write
 
-EXAMPLES = ("so101_blocks", "lekiwi_fetch")
+EXAMPLES = ("so101_blocks", "so101_red_left", "lekiwi_fetch")
 
 
 def dry_run(task, strategy: str, n: int, cost: str, budget: float | None = None, seed: int = 0):

@@ -188,6 +188,16 @@ CASES = {
         "instances[0].template: unknown template 'carry'; declared templates: move",
     ),
     "listed and sampled": ([("instances:", "sampler: {seed: 1}\ninstances:")], "sampler:", "give either `instances:`"),
+    "sampler fixes an unknown slot": (
+        [("perturbations:", "sampler: {slots: {mug: red_cup}}\nperturbations:")],
+        "sampler:",
+        "sampler.slots.mug: no template has a slot 'mug'; slots: cup, side",
+    ),
+    "sampler fixes a value the slot does not take": (
+        [("perturbations:", "sampler: {slots: {side: middle}}\nperturbations:")],
+        "sampler:",
+        "sampler.slots.side: 'middle' is not allowed in slot 'side'; expected one of: left, right",
+    ),
 }
 
 
@@ -294,3 +304,17 @@ def test_instances_built_in_python_are_checked_against_the_template(tmp_path):
         task.make_instance("x", "carry", {}, scene)
     with pytest.raises(UserError, match=r"slot 'side' needs one of left, right, got 'up'"):
         task.make_instance("x", "move", {"cup": "red_cup", "side": "up"}, scene)
+
+
+def test_sampler_slots_fix_every_base_and_leave_the_perturbations_free(tmp_path):
+    task = load_task_file(
+        write(
+            tmp_path,
+            CUPS.replace("perturbations:", "sampler: {seed: 3, slots: {cup: red_cup, side: left}}\nperturbations:"),
+        )
+    )
+    bases = task.sample(20, np.random.default_rng(0))
+    assert {b.instruction for b in bases} == {"move the red cup to the left"}
+    assert len({b.scene.objects["red_cup"].y for b in bases}) == 20  # new placements each time
+    flipped = task.perturbations.get("LB").apply(bases[0], np.random.default_rng(0))
+    assert flipped.instruction == "move the red cup to the right"
