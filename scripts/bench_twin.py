@@ -1,11 +1,12 @@
 """Time LeRobot's own `SO101Follower` on the virtual SO-101's serial bus, from a process that loads no code of this
 project (the twin's bus runs in a child process); with --eval, then the evaluator on the whole twin (640x480 camera,
-30 Hz, the scripted operator, a random-weight ACT for the SO-101's features): the control loop's mean period, how
-often the staging camera flags cubes placed 4 cm and 0.5 cm off, and --cost=measured against the twin's truth.
+30 Hz, the scripted operator, a random-weight ACT sized as the CPU recipe trains one, at 160x120): the control
+loop's mean period, how often the staging camera flags cubes placed 4 cm and 0.5 cm off, and --cost=measured against
+the twin's truth.
 
 Figures last: connect_s=... connect_failures=... (before the first connect that worked) reach_s=... (the slowest of the poses to within 2 degrees) sync_read_ms=...
-sync_write_ms=... write_ms=... lost_calls=... project_code_loaded=false [period_ms=... flagged_4cm=... flagged_05cm=...
-measured_cost_err_cm=...].
+sync_write_ms=... write_ms=... lost_calls=... project_code_loaded=false [flagged_4cm=... measured_cost_err_cm_4cm=...
+measured_cube_err_cm_4cm=... (and the same for 0.5 cm) period_ms=...].
 
     .venv/bin/python scripts/bench_twin.py [--eval --instances=4]
 """
@@ -193,16 +194,18 @@ def cube_errors(staging: dict, truth: str) -> list[float]:
 
 
 def save_act(directory: Path) -> Path:
+    """A random-weight ACT shaped as scripts/train_so101_act.py trains one for this CPU (frames of 160x120, its
+    transformer and chunks): the camera's 640x480 frames reach it scaled, as they would a policy recorded at 160x120."""
     from lerobot.cameras.zmq import ZMQCameraConfig
 
     from lerobot_contrast.policies.pretrained import save_fresh_policy
 
-    small = {"dim_model": 64, "n_heads": 2, "dim_feedforward": 128, "n_encoder_layers": 1, "n_decoder_layers": 1,
-             "chunk_size": 5, "n_action_steps": 5, "use_vae": False}  # fmt: skip
-    camera = ZMQCameraConfig(server_address="127.0.0.1", port=5555, camera_name="front", width=640, height=480, fps=30)
+    recipe = {"dim_model": 256, "dim_feedforward": 1024, "n_encoder_layers": 4, "n_decoder_layers": 1,
+              "chunk_size": 50, "n_action_steps": 25, "use_vae": False}  # fmt: skip
+    camera = ZMQCameraConfig(server_address="127.0.0.1", port=5555, camera_name="front", width=160, height=120, fps=30)
     config = SO101FollowerConfig(port="unused", id="act", calibration_dir=directory / "calibration",
                                  cameras={"front": camera})  # fmt: skip
-    return save_fresh_policy(SO101Follower(config), "act", directory, device="cpu", **small)
+    return save_fresh_policy(SO101Follower(config), "act", directory, device="cpu", **recipe)
 
 
 def ask(address: str, request: dict) -> dict:

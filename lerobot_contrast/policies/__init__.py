@@ -43,7 +43,15 @@ class PolicyEntry:
 
     def builder(self) -> Builder:
         module, _, function = self.build.partition(":")
-        return getattr(import_module(module), function)
+        try:
+            return getattr(import_module(module), function)
+        except ModuleNotFoundError as error:
+            if error.name != module.split(".")[0]:
+                raise
+            raise PolicyError(
+                f"--policy.type={self.name} needs the {error.name} distribution, which is not installed: "
+                f"pip install {error.name}"
+            ) from None
 
 
 # --policy.path, or --policy.type naming a LeRobot policy type (act, diffusion, smolvla, ...) built fresh.
@@ -88,6 +96,11 @@ for _entry in (
         "lerobot_contrast.policies.route_follower:build",
         "the scripted navigator following the shortest route",
         task="vln",
+    ),
+    PolicyEntry(
+        "so101_demonstrator",
+        "lerobot_teleoperator_so101_demo.policy:build",
+        "the scripted demonstrator on the virtual SO-101: reads each goal and the twin's true scene ([twin] extra)",
     ),
 ):
     register(_entry)

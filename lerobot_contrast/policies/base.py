@@ -43,8 +43,9 @@ class PolicyArgs:
     # A LeRobot policy to load: a directory written by save_pretrained, or a Hub repo id.
     path: str | None = None
     # Without --policy.path: a registered policy (tabletop_pointer: the learned pixel policy whose weights ship;
-    # oracle: scripted push oracle with privileged state; random; route_follower: scripted VLN navigator), or a
-    # LeRobot policy type built fresh with random weights from the robot's features (for smoke tests).
+    # oracle: scripted push oracle with privileged state; random; route_follower: scripted VLN navigator;
+    # so101_demonstrator: the virtual SO-101's scripted demonstrator), or a LeRobot policy type built fresh with
+    # random weights from the robot's features (for smoke tests).
     type: str | None = field(default=None, metadata={"help_default": DEFAULT_POLICY})
     # Torch device for a LeRobot policy (cpu, cuda, mps); default: the policy config's own.
     device: str | None = None
@@ -53,6 +54,9 @@ class PolicyArgs:
     # Gaussian noise added to each action of the oracle or a LeRobot policy (the learned default included), in
     # the action's units: metres on the simulated tabletop (0 = none). It makes a noisier copy of a policy.
     noise_std: float = 0.0
+    # The virtual SO-101's placement socket, for --policy.type=so101_demonstrator, which reads the twin's true
+    # scene (as `python -m lerobot_contrast.twin` prints it); unset: tcp://127.0.0.1:5556, the twin's own.
+    placement: str | None = None
     # Probability per episode that the oracle ignores a perturbed instruction's words and executes
     # its base instruction instead (0 = reads every instruction).
     language_blind: float = 0.0

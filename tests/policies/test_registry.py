@@ -91,3 +91,12 @@ def test_noise_std_on_a_policy_without_continuous_actions_is_refused_in_one_line
     robot = LanguageTableSim(LanguageTableSimConfig())
     with pytest.raises(PolicyError, match="--policy.type=random takes no action noise"):
         make_policy(PolicyArgs(type="random", noise_std=0.01), robot, load_task("language_table"))
+
+
+def test_a_policy_whose_distribution_is_not_installed_is_named_in_one_line(monkeypatch):
+    entry = PolicyEntry("elsewhere", "lerobot_policy_not_installed.policy:build", "a plugin's policy")
+    monkeypatch.setitem(POLICIES, entry.name, entry)
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    with pytest.raises(PolicyError, match=r"^--policy.type=elsewhere needs the lerobot_policy_not_installed "
+                                          r"distribution, which is not installed: pip install "):  # fmt: skip
+        make_policy(PolicyArgs(type="elsewhere"), robot, load_task("language_table"))

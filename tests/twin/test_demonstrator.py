@@ -1,15 +1,17 @@
 """The scripted demonstrator (`--teleop.type=so101_demo`): it understands every so101_blocks instruction, places the
-cubes anew (seeded) when it connects and at each reset period, hands out joint goals in LeRobot's degrees, and
-`lerobot-record` records with it on the twin a dataset that loads."""
+cubes anew (seeded) when it connects and at each reset period, and hands out joint goals in LeRobot's degrees
+(`lerobot-record` with it on the twin: test_act_loop.py)."""
 
+import json
 import math
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from lerobot_teleoperator_so101_demo import SO101Demo, SO101DemoConfig, plan
 from lerobot_teleoperator_so101_demo import so101_demo as demo_module
-from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+from lerobot_teleoperator_so101_demo.launch import free_port
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import load_task_file
@@ -18,7 +20,6 @@ from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement import PlacementServer
 from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
-from tests.study_scripts import load_script
 
 INSTRUCTION = "put the red cube in the left bin"
 
@@ -139,28 +140,38 @@ def test_the_recording_script_answers_a_bad_instruction_in_one_line(tmp_path):
     assert done.stderr.count("\n") == 1
 
 
-@pytest.mark.slow
-def test_lerobot_record_records_two_episodes_on_the_twin(tmp_path, task):
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+def test_as_an_evaluator_policy_it_carries_out_each_trials_goal_on_the_true_scene(placement, monkeypatch):
+    from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
+    from lerobot_teleoperator_so101_demo import policy as policy_module
 
-    record = load_script("record_so101_demos")
-    args = record.parse_args([f"--output={tmp_path / 'demos'}", "--episodes=2", "--reset_time_s=0.5", "--episode_time_s=8", "--pace=1",
-                              "--width=96", "--height=72", "--seed=5"])  # fmt: skip
-    twin = start_twin(f"--calibration_dir={tmp_path}", f"--camera_port={free_port()}", f"--control_port={free_port()}",
-                      "--width=96", "--height=72", "--seed=5")  # fmt: skip
-    try:
-        assert record.record(args, twin, 0) == 0
-        from lerobot_contrast.twin.placement import request
+    from lerobot_contrast import PolicyArgs, TrialContext, make_policy
 
-        scene = request({"cmd": "scene"}, int(twin.placement.rsplit(":", 1)[1]))["objects"]
-    finally:
-        twin.stop()
-    dataset = LeRobotDataset(record.REPO_ID, root=tmp_path / "demos")
-    assert dataset.num_episodes == 2 and dataset.meta.robot_type == "so_follower"
-    assert dataset.features["action"]["names"] == [f"{name}.pos" for name in arm.MOTOR_NAMES]
-    assert dataset.features["observation.images.front"]["shape"] == (72, 96, 3)
-    assert dataset[0]["task"] == INSTRUCTION
-    # The second episode's cubes were placed in the reset period: the ones left alone lie where its placement put them.
-    second = plan.placement(task.spec, 5, 1)
-    for name in ("green_cube", "blue_cube"):
-        assert scene[name][:2] == pytest.approx(second[name][:2], abs=0.01)
+    clock = [50.0]
+    monkeypatch.setattr(policy_module.time, "monotonic", lambda: clock[0])
+    robot = SO101Follower(SO101FollowerConfig(port="unused", id="demo"))
+    task = load_task_file("so101_red_left")
+    demonstrator = make_policy(PolicyArgs(type="so101_demonstrator", placement=placement.address), robot, task)
+    base = task.sample(1, np.random.default_rng(0))[0]
+    flipped = task.perturbations.get("LB2").apply(base, np.random.default_rng(0))  # "... in the right bin"
+    for name, pose in base.scene.objects.items():  # the operator staged the trial's scene
+        placement.answer(json.dumps({"cmd": "place", "object": name, "x": pose.x, "y": pose.y}).encode())
+    pans = []
+    for instance in (base, flipped):
+        demonstrator.reset(TrialContext(0, instance, base, base.scene, 0.0, "reset", np.random.default_rng(0), 1))
+        actions = [demonstrator.act({}) for clock[0] in np.arange(50.0, 70.0, 0.5)]
+        assert set(actions[0]) == {f"{name}.pos" for name in arm.MOTOR_NAMES}
+        pans.append(min(a["shoulder_pan.pos"] for a in actions) + max(a["shoulder_pan.pos"] for a in actions))
+    # The same red cube, put in the left bin (y > 0), then in the right one: the arm swings the other way to drop it
+    # (LeRobot's shoulder_pan degrees grow towards the arm's right).
+    assert pans[1] > pans[0] + 20
+
+
+def test_as_a_policy_it_refuses_another_robot_in_one_line():
+    from lerobot_contrast import PolicyArgs, make_policy
+    from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
+    from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
+    from lerobot_contrast.policies import PolicyError
+
+    with pytest.raises(PolicyError, match=r"^--policy.type=so101_demonstrator drives an SO-101 \(--robot.type="):
+        make_policy(PolicyArgs(type="so101_demonstrator"), LanguageTableSim(LanguageTableSimConfig()),
+                    load_task_file("so101_red_left"))  # fmt: skip

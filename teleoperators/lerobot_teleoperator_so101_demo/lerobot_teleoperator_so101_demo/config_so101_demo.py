@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from lerobot.teleoperators.config import TeleoperatorConfig
 
 DEFAULT_PLACEMENT = "tcp://127.0.0.1:5556"
+DEFAULT_PACE = 1.5
 
 
 @TeleoperatorConfig.register_subclass("so101_demo")
@@ -28,4 +29,4 @@ class SO101DemoConfig(TeleoperatorConfig):
     # The number of the first episode (a resumed recording continues the placements where it stopped).
     first_episode: int = 0
     # Each motion's time, as a multiple of the planned one (larger: slower, surer on a loaded machine).
-    pace: float = 1.5
+    pace: float = DEFAULT_PACE

@@ -4,6 +4,7 @@ the object goes, the joint goals that take it there (the twin's inverse kinemati
 from __future__ import annotations
 
 import itertools
+import logging
 import math
 from collections.abc import Mapping
 
@@ -104,3 +105,30 @@ def placement(spec: TaskSpec, seed: int, episode: int) -> dict[str, tuple[float,
     return {
         name: (scene.objects[name].x, scene.objects[name].y, rng.uniform(-math.pi / 4, math.pi / 4)) for name in movable
     }
+
+
+def true_poses(reply: Mapping) -> dict[str, tuple[float, float, float, float]]:
+    """The objects' poses (x, y, z, yaw) from the twin's answer to a `scene` request."""
+    return {name: (x, y, reply["z"][name], yaw) for name, (x, y, yaw) in reply["objects"].items()}
+
+
+def schedule(model: mujoco.MjModel, predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec, pace: float):
+    """Each motion's end (seconds from the start, times `pace`) with its joint goals; empty (stay at rest, with a
+    warning) when nothing reachable does the task."""
+    try:
+        steps = waypoints(model, predicate, poses, spec)
+    except reach.Unreachable as error:
+        where = {name: [round(value, 3) for value in pose] for name, pose in poses.items()}
+        logging.warning("so101_demo: episode left at rest: %s; the objects (x, y, z, yaw): %s", error, where)
+        steps = []
+    end, timed = 0.0, []
+    for step in steps:
+        end += step.seconds * pace
+        timed.append((end, dict(step.goals)))
+    return timed
+
+
+def goals_at(timed: list[tuple[float, dict[str, float]]], elapsed: float) -> dict[str, float]:
+    """The joint goals (LeRobot's degrees) `elapsed` seconds into the schedule: rest before and after."""
+    goals = next((goals for end, goals in timed if elapsed < end), arm.REST)
+    return {f"{name}.pos": arm.to_lerobot(name, goals[name]) for name in arm.MOTOR_NAMES}

@@ -12,7 +12,7 @@ from lerobot.teleoperators.teleoperator import Teleoperator
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.twin import arm, reach
+from lerobot_contrast.twin import arm
 from lerobot_contrast.twin.operator import OperatorError, Placement
 from lerobot_teleoperator_so101_demo import plan
 from lerobot_teleoperator_so101_demo.config_so101_demo import SO101DemoConfig
@@ -111,18 +111,8 @@ class SO101Demo(Teleoperator):
         """Plan this episode's motion from the true scene (the arm at rest)."""
         if not self._placed:  # no reset period (--dataset.reset_time_s=0): place now
             self.place_anew()
-        reply = self.ask({"cmd": "scene"})
-        poses = {name: (x, y, reply["z"][name], yaw) for name, (x, y, yaw) in reply["objects"].items()}
-        try:
-            steps = plan.waypoints(self.model, self.predicate, poses, self.task.spec)
-        except reach.Unreachable as error:
-            where = {name: [round(value, 3) for value in pose] for name, pose in poses.items()}
-            logging.warning("so101_demo: episode left at rest: %s; the objects (x, y, z, yaw): %s", error, where)
-            steps = []
-        end, self._schedule = 0.0, []
-        for step in steps:
-            end += step.seconds * self.config.pace
-            self._schedule.append((end, dict(step.goals)))
+        poses = plan.true_poses(self.ask({"cmd": "scene"}))
+        self._schedule = plan.schedule(self.model, self.predicate, poses, self.task.spec, self.config.pace)
         self._start, self._placed = now, False
         if self.schedule_s > self.episode_time_s:
             logging.warning(
@@ -137,9 +127,6 @@ class SO101Demo(Teleoperator):
         """How long this episode's motion takes (0: it stays at rest)."""
         return self._schedule[-1][0] if self._schedule else 0.0
 
-    def goals_at(self, elapsed: float) -> dict[str, float]:
-        return next((goals for end, goals in self._schedule if elapsed < end), arm.REST)
-
     def get_action(self) -> dict[str, float]:
         now = time.monotonic()
         if self._start is None:
@@ -150,5 +137,4 @@ class SO101Demo(Teleoperator):
             elif not self._placed:
                 self.place_anew()
         self._last = now
-        goals = self.goals_at(now - self._start)
-        return {f"{name}.pos": arm.to_lerobot(name, goals[name]) for name in arm.MOTOR_NAMES}
+        return plan.goals_at(self._schedule, now - self._start)

@@ -1,0 +1,114 @@
+"""The contrast-set study of an ACT checkpoint on the virtual SO-101, run as a user runs it on the arm: LeRobot's
+`so101_follower` driver and `zmq` camera against the twin, the operator console answered by the scripted operator,
+the task `so101_red_left` (bases: "put the red cube in the left bin" in new placements; every perturbation). The
+scripted demonstrator, which reads the words, runs the same plan as the reference. Each run resumes where a kill
+left it; the report compares the two.
+
+    python scripts/study_so101_act.py --checkpoint=DIR --output=DIR [--n_instances=30] [--max_episode_s=15]
+        [--policies=act,demonstrator] [--placement_error=none]
+
+The twin's camera renders at the checkpoint's own frame size (what the policy was recorded with).
+Prints `runs=.. trials=.. wall_s=.. report=..` last."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shlex
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+POLICIES = ("act", "demonstrator")
+
+
+def frame_size(checkpoint: Path) -> tuple[int, int]:
+    """The checkpoint's camera frame (width, height), from its config's visual input."""
+    features = json.loads((checkpoint / "config.json").read_text())["input_features"]
+    visual = [f["shape"] for f in features.values() if f["type"] == "VISUAL"]
+    if len(visual) != 1:
+        raise SystemExit(f"error: --checkpoint={checkpoint}: expected one camera input, found {len(visual)}")
+    _, height, width = visual[0]
+    return width, height
+
+
+def eval_command(args: argparse.Namespace, twin, policy: str, run_dir: Path) -> list[str]:
+    chosen = ([f"--policy.path={args.checkpoint}", "--policy.device=cpu"] if policy == "act"
+              else ["--policy.type=so101_demonstrator", f"--policy.placement={twin.placement}"])  # fmt: skip
+    if (run_dir / "config.json").is_file():  # a killed run: the evaluator's own resume, on this twin's new ports
+        flags = ["--resume=true", f"--output_dir={run_dir}", *shlex.split(twin.robot_flags), *chosen]
+    else:
+        flags = [*shlex.split(twin.robot_flags), *chosen, "--task=so101_red_left", "--strategy=contrast",
+                 f"--n_instances={args.n_instances}", f"--max_episode_s={args.max_episode_s}", "--fps=30",
+                 "--staging.viewer=none", f"--seed={args.seed}", f"--output_dir={run_dir}"]  # fmt: skip
+    return [sys.executable, "-m", "lerobot_contrast.twin.operator", f"--placement={twin.placement}",
+            f"--placement_error={args.placement_error}", *flags]  # fmt: skip
+
+
+def trials(run_dir: Path) -> int:
+    journal = run_dir / "journal.jsonl"
+    return len(journal.read_text().splitlines()) if journal.is_file() else 0
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--checkpoint", type=Path, required=True, help="ACT's pretrained_model directory")
+    parser.add_argument("--output", type=Path, required=True, help="the study's folder: one run per policy")
+    parser.add_argument("--n_instances", type=int, default=30, help="bases (each with its perturbations)")
+    parser.add_argument("--max_episode_s", type=float, default=15.0)
+    parser.add_argument("--policies", default=",".join(POLICIES), help="which of act,demonstrator to run")
+    parser.add_argument("--placement_error", default="none", help="the scripted operator's: none or normal:SIGMA")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    args.policies = [p for p in args.policies.split(",") if p]
+    unknown = sorted(set(args.policies) - set(POLICIES))
+    if unknown or not args.policies:
+        parser.error(f"--policies: {','.join(unknown) or 'none given'}; choose from {','.join(POLICIES)}")
+    if args.n_instances < 1 or args.max_episode_s <= 0:
+        parser.error("--n_instances must be at least 1 and --max_episode_s above 0")
+    if not (args.checkpoint / "config.json").is_file():
+        parser.error(f"--checkpoint={args.checkpoint} holds no config.json; give lerobot-train's pretrained_model")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    os.environ.setdefault("HF_HUB_OFFLINE", "1")
+    from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+
+    from lerobot_contrast.contrast.errors import UserError
+
+    width, height = frame_size(args.checkpoint)
+    began = time.monotonic()
+    runs = [args.output / policy for policy in args.policies]
+    with tempfile.TemporaryDirectory() as calibration:
+        flags = ["--task=so101_red_left", f"--seed={args.seed}", f"--calibration_dir={calibration}",
+                 f"--camera_port={free_port()}", f"--control_port={free_port()}", "--fps=30", f"--width={width}",
+                 f"--height={height}"]  # fmt: skip
+        try:
+            twin = start_twin(*flags)
+        except UserError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+        try:
+            for policy, run_dir in zip(args.policies, runs, strict=True):
+                status = subprocess.run(eval_command(args, twin, policy, run_dir)).returncode
+                if status != 0:
+                    print(f"error: the {policy} run stopped ({status}); run the same command again to resume",
+                          file=sys.stderr)  # fmt: skip
+                    return 1
+        finally:
+            twin.stop()
+    report = args.output / "report"
+    subprocess.run([sys.executable, "-m", "lerobot_contrast.report", *map(str, runs), f"--output_dir={report}"],
+                   check=True)  # fmt: skip
+    print(f"runs={len(runs)} trials={sum(trials(r) for r in runs)} wall_s={time.monotonic() - began:.0f} "
+          f"report={report / 'report.md'}")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,57 @@
+"""The scripted demonstrator as an evaluator policy (`--policy.type=so101_demonstrator`): on the virtual SO-101 it
+reads each trial's goal, which is what the instruction's words mean, and the twin's true scene, and runs the same
+plan it demonstrates with. It is the contrast set's reference, a policy that reads every word: against it, a learned
+policy's losses on the perturbations are the policy's own."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.domains.task_file import FileTask
+from lerobot_contrast.policies.base import PolicyArgs, PolicyError
+from lerobot_contrast.twin.operator import OperatorError, Placement
+from lerobot_teleoperator_so101_demo import plan
+from lerobot_teleoperator_so101_demo.config_so101_demo import DEFAULT_PACE, DEFAULT_PLACEMENT
+
+
+class SO101Demonstrator:
+    name = "so101_demonstrator"
+
+    def __init__(self, task: FileTask, placement: str, pace: float) -> None:
+        self.task, self.pace = task, pace
+        self.model = plan.arm_model(task.spec)
+        self.placement = Placement(placement)
+        self._true_poses()  # a twin that does not answer is one line before the run starts
+        self._schedule: list[tuple[float, dict[str, float]]] = []
+        self._start: float | None = None
+
+    def reset(self, context: TrialContext) -> None:
+        predicate = context.instance.goal["predicate"]
+        self._schedule = plan.schedule(self.model, predicate, self._true_poses(), self.task.spec, self.pace)
+        self._start = None
+
+    def _true_poses(self) -> dict[str, tuple[float, float, float, float]]:
+        try:
+            return plan.true_poses(self.placement.ask({"cmd": "scene"}))
+        except OperatorError as error:
+            raise PolicyError(
+                f"--policy.type=so101_demonstrator: {error}; start the twin, or give its socket with --policy.placement"
+            ) from None
+
+    def act(self, observation: Mapping[str, Any]) -> dict[str, float]:
+        now = time.monotonic()
+        if self._start is None:  # the episode's clock starts at its first step, as the motion does
+            self._start = now
+        return plan.goals_at(self._schedule, now - self._start)
+
+
+def build(args: PolicyArgs, robot: Any, task: Any, rename_map: Mapping[str, str]) -> SO101Demonstrator:
+    if not isinstance(task, FileTask) or robot.robot_type != "so_follower":
+        raise PolicyError(
+            "--policy.type=so101_demonstrator drives an SO-101 (--robot.type=so101_follower, the virtual SO-101) "
+            "on a task file's world (--task=so101_blocks, so101_red_left or yours)"
+        )
+    return SO101Demonstrator(task, args.placement or DEFAULT_PLACEMENT, DEFAULT_PACE)

@@ -1,0 +1,62 @@
+"""The LeRobot user's own loop on the virtual SO-101, through LeRobot's own commands: `lerobot-record` with the
+scripted demonstrator, `lerobot-train --policy.type=act`, then a contrast-set evaluation of the checkpoint (and of the
+demonstrator, which reads the words) with the scripted operator at the console."""
+
+import json
+
+import pytest
+from lerobot_teleoperator_so101_demo import plan
+from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+
+from lerobot_contrast.domains.task_file import load_task_file
+from lerobot_contrast.twin import arm
+from tests.study_scripts import load_script
+
+INSTRUCTION = "put the red cube in the left bin"
+
+
+@pytest.mark.slow
+def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    record = load_script("record_so101_demos")
+    demos = tmp_path / "demos"
+    args = record.parse_args([f"--output={demos}", "--episodes=2", "--reset_time_s=0.5", "--episode_time_s=8", "--pace=1",
+                              "--width=96", "--height=72", "--seed=5"])  # fmt: skip
+    twin = start_twin(f"--calibration_dir={tmp_path}", f"--camera_port={free_port()}", f"--control_port={free_port()}",
+                      "--width=96", "--height=72", "--seed=5")  # fmt: skip
+    try:
+        assert record.record(args, twin, 0) == 0
+        from lerobot_contrast.twin.placement import request
+
+        scene = request({"cmd": "scene"}, int(twin.placement.rsplit(":", 1)[1]))["objects"]
+    finally:
+        twin.stop()
+    dataset = LeRobotDataset(record.REPO_ID, root=demos)
+    assert dataset.num_episodes == 2 and dataset.meta.robot_type == "so_follower"
+    assert dataset.features["action"]["names"] == [f"{name}.pos" for name in arm.MOTOR_NAMES]
+    assert dataset.features["observation.images.front"]["shape"] == (72, 96, 3)
+    assert dataset[0]["task"] == INSTRUCTION
+    # The second episode's cubes were placed in the reset period: the ones left alone lie where its placement put them.
+    second = plan.placement(load_task_file("so101_blocks").spec, 5, 1)
+    for name in ("green_cube", "blue_cube"):
+        assert scene[name][:2] == pytest.approx(second[name][:2], abs=0.01)
+
+    train = load_script("train_so101_act")
+    flags = [f"--dataset={demos}", f"--output={tmp_path / 'act'}", "--batch_size=2", "--save_freq=2", "--num_workers=0"]
+    assert train.main([*flags, "--steps=2"]) == 0
+    assert train.main([*flags, "--steps=3"]) == 0  # trains on from the last checkpoint, as after a kill
+    assert train.trained_steps(tmp_path / "act") == 3
+    checkpoint = train.last_checkpoint(tmp_path / "act")
+    config = json.loads((checkpoint / "config.json").read_text())
+    assert config["type"] == "act" and config["input_features"]["observation.images.front"]["shape"] == [3, 72, 96]
+
+    study = load_script("study_so101_act")
+    out = tmp_path / "study"
+    assert study.main([f"--checkpoint={checkpoint}", f"--output={out}", "--n_instances=1", "--max_episode_s=1"]) == 0
+    for policy in ("act", "demonstrator"):
+        records = [json.loads(line) for line in (out / policy / "journal.jsonl").read_text().splitlines()]
+        assert [r["status"] for r in records] == ["done"] * len(records) and len(records) >= 4
+        assert records[0]["instance"]["instruction"] == INSTRUCTION  # the base says the recorded task; its perturbations follow
+        assert {r["perturbation"] for r in records[1:]} >= {"L", "LB2", "LB3", "SB"}
+    assert "ΔLB3" in (out / "report" / "report.md").read_text()
