@@ -4,10 +4,11 @@ the task `so101_red_left` (bases: "put the red cube in the left bin" in new plac
 scripted demonstrator, which reads the words, runs the same plan as the reference. Each run resumes where a kill
 left it; the report compares the two.
 
-    python scripts/study_so101_act.py --checkpoint=DIR --output=DIR [--n_instances=30] [--max_episode_s=15]
-        [--policies=act,demonstrator] [--placement_error=none]
+    python scripts/study_so101_act.py --checkpoint=DIR --output=DIR [--n_instances=30] [--max_episode_s=12]
+        [--policies=act,demonstrator] [--placement_error=none] [--width=160 --height=120]
 
-The twin's camera renders at the checkpoint's own frame size (what the policy was recorded with).
+The twin's camera renders at the checkpoint's own frame size (what the policy was recorded with); without ACT,
+at --width x --height. The report covers every policy's run in the folder, so the two runs may be made apart.
 Prints `runs=.. trials=.. wall_s=.. report=..` last."""
 
 from __future__ import annotations
@@ -55,13 +56,15 @@ def trials(run_dir: Path) -> int:
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--checkpoint", type=Path, required=True, help="ACT's pretrained_model directory")
+    parser.add_argument("--checkpoint", type=Path, help="ACT's pretrained_model directory (for --policies=act)")
     parser.add_argument("--output", type=Path, required=True, help="the study's folder: one run per policy")
     parser.add_argument("--n_instances", type=int, default=30, help="bases (each with its perturbations)")
-    parser.add_argument("--max_episode_s", type=float, default=15.0)
+    parser.add_argument("--max_episode_s", type=float, default=12.0, help="as long as a recorded episode")
     parser.add_argument("--policies", default=",".join(POLICIES), help="which of act,demonstrator to run")
     parser.add_argument("--placement_error", default="none", help="the scripted operator's: none or normal:SIGMA")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--width", type=int, default=160, help="the camera's frame without a checkpoint")
+    parser.add_argument("--height", type=int, default=120)
     args = parser.parse_args(argv)
     args.policies = [p for p in args.policies.split(",") if p]
     unknown = sorted(set(args.policies) - set(POLICIES))
@@ -69,7 +72,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error(f"--policies: {','.join(unknown) or 'none given'}; choose from {','.join(POLICIES)}")
     if args.n_instances < 1 or args.max_episode_s <= 0:
         parser.error("--n_instances must be at least 1 and --max_episode_s above 0")
-    if not (args.checkpoint / "config.json").is_file():
+    if args.checkpoint is not None:  # lerobot-train's `last` moves on as training goes on: the run names the step
+        args.checkpoint = args.checkpoint.resolve()
+    if "act" in args.policies and (args.checkpoint is None or not (args.checkpoint / "config.json").is_file()):
         parser.error(f"--checkpoint={args.checkpoint} holds no config.json; give lerobot-train's pretrained_model")
     return args
 
@@ -81,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from lerobot_contrast.contrast.errors import UserError
 
-    width, height = frame_size(args.checkpoint)
+    width, height = (args.width, args.height) if args.checkpoint is None else frame_size(args.checkpoint)
     began = time.monotonic()
     runs = [args.output / policy for policy in args.policies]
     with tempfile.TemporaryDirectory() as calibration:
@@ -103,7 +108,8 @@ def main(argv: list[str] | None = None) -> int:
         finally:
             twin.stop()
     report = args.output / "report"
-    subprocess.run([sys.executable, "-m", "lerobot_contrast.report", *map(str, runs), f"--output_dir={report}"],
+    every = [args.output / policy for policy in POLICIES if (args.output / policy / "journal.jsonl").is_file()]
+    subprocess.run([sys.executable, "-m", "lerobot_contrast.report", *map(str, every), f"--output_dir={report}"],
                    check=True)  # fmt: skip
     print(f"runs={len(runs)} trials={sum(trials(r) for r in runs)} wall_s={time.monotonic() - began:.0f} "
           f"report={report / 'report.md'}")  # fmt: skip

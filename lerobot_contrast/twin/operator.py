@@ -29,6 +29,7 @@ REPLY_TIMEOUT_MS = 5000
 # After placing, wait as a person's hands leave the table: the camera's latest frame is up to a few frames old, and
 # the staging check reads it at Enter (measured on the twin: the frame read at once still showed the old pose).
 SETTLE_S = 0.5
+STRAY_M = 0.01  # an object this far from where the trial starts it was moved: put it back
 WHERE = r"\((?:off the workspace|[+-]\d+\.\d+, [+-]\d+\.\d+)\)"
 TRIAL = re.compile(r"trial (\d+)/(\d+) · ")
 MOVE = re.compile(rf"^\W*(\w+)\s*[│|]\s*({WHERE})\s*[│|]\s*({WHERE})\s*[│|]")
@@ -166,10 +167,15 @@ class Operator:
         elif STAGED_PROMPT in line:
             before = self.placement.scene()
             self._place(self.moves)
+            strays = self._strays(before)
+            self._place(strays)
             after = self.placement.scene()
             moved = {name: pose.distance_to(after.objects[name]) for name, pose in before.objects.items()}
             each = ", ".join(f"{name} {distance:.3f}" for name, distance in moved.items() if distance > 0.001)
             self.said.append(f"moved {sum(moved.values()):.3f} m (the twin's truth: {each})")
+            if strays:  # as a person who put back what the robot moved says so: what was moved, all told
+                self.said.append(f"put back {', '.join(strays)}, which the console said to leave")
+                return f"c {sum(moved.values()):.3f}"
             return ""
         elif CHECK_PROMPT in line:
             if self.on_flagged == "fix" and self.fixes < 2:
@@ -184,6 +190,18 @@ class Operator:
         elif ABORTED_PROMPT in line:
             return ""
         return None
+
+    def _strays(self, seen: Scene) -> dict[str, tuple[float, float]]:
+        """Objects the console says to leave that are not where the trial starts them (the robot moved them in the
+        trial before, and no camera told the console): a person sees them and puts them back."""
+        instance = self.plan.instances.get(self.index)
+        if instance is None:
+            return {}
+        return {
+            name: (pose.x, pose.y)
+            for name, pose in instance.scene.objects.items()
+            if name not in self.moves and name in seen.objects and seen.objects[name].distance_to(pose) > STRAY_M
+        }
 
     def _place(self, targets: dict[str, tuple[float, float] | None]) -> None:
         for name, target in targets.items():

@@ -157,6 +157,33 @@ def test_the_operator_places_what_the_console_says_and_labels_from_the_true_scen
     assert placement.placed == {"green_cube": (0.320, -0.041), "red_cube": (0.269, 0.057)}
 
 
+class MovingPlacement(FakePlacement):
+    """A placement socket whose scene follows what is placed, as the twin's does."""
+
+    def place(self, name: str, x: float, y: float) -> None:
+        super().place(name, x, y)
+        self.reported = Scene({**self.reported.objects, name: Pose(x, y)})
+
+
+def test_what_the_robot_moved_and_the_console_says_to_leave_is_put_back_and_reported():
+    plan = Plan([*RUN, "--robot.type=so101_follower", "--robot.port=unused"])
+    start = plan.instances[1].scene.objects  # the ΔL trial starts from the base's scene
+    in_bin = Pose(0.30, 0.18)  # where the base's trial left the red cube: no camera told the console
+    placement = MovingPlacement(Scene({**start, "red_cube": in_bin}))
+    scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="accept")
+    console = [
+        "───── trial 2/3 · so101_blocks-0000 · ΔL (new wording, same behaviour) ─────",
+        f"instruction: {plan.instances[1].instruction}",
+        "leave as they are: blue_cube, green_cube, red_cube",
+        "nothing to move",
+        "Enter when staged · c METRES if you moved things differently · k skip trial · q stop session",
+    ]
+    typed = [answer for line in console if (answer := scripted.read(line)) is not None]
+    back = start["red_cube"]
+    assert placement.placed == {"red_cube": pytest.approx((back.x, back.y))}
+    assert typed == [f"c {in_bin.distance_to(back):.3f}"]  # the metres moved, as a person types them
+
+
 def test_the_operators_bad_input_is_one_line():
     with pytest.raises(OperatorError, match="--placement_error=uniform:1: give none, normal:SIGMA or offset:D"):
         PlacementError.parse("uniform:1")
