@@ -99,6 +99,13 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {error}", file=sys.stderr)
             return 2
         try:
+            from lerobot_contrast.domains.task_file import load_task_file
+            from lerobot_contrast.twin.operator import Placement
+            from lerobot_contrast.twin.scene import start_poses
+
+            placement = Placement(twin.placement)  # the objects wait in their storage row, where the plan starts
+            for name, pose in start_poses(load_task_file("so101_red_left").spec, None).items():
+                placement.place(name, pose.x, pose.y)
             for policy, run_dir in zip(args.policies, runs, strict=True):
                 status = subprocess.run(eval_command(args, twin, policy, run_dir)).returncode
                 if status != 0:
