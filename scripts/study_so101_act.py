@@ -44,6 +44,7 @@ def eval_command(args: argparse.Namespace, twin, policy: str, run_dir: Path) -> 
     else:
         flags = [*shlex.split(twin.robot_flags), *chosen, "--task=so101_red_left", "--strategy=contrast",
                  f"--n_instances={args.n_instances}", f"--max_episode_s={args.max_episode_s}", "--fps=30",
+                 f"--max_episode_steps={round(args.max_episode_s * 30)}",
                  "--staging.viewer=none", f"--seed={args.seed}", f"--output_dir={run_dir}"]  # fmt: skip
     return [sys.executable, "-m", "lerobot_contrast.twin.operator", f"--placement={twin.placement}",
             f"--placement_error={args.placement_error}", *flags]  # fmt: skip
