@@ -1,8 +1,10 @@
 """Command-line flags over a draccus config: `--name=value` or `--name value`, one-line errors that suggest the flag
-meant, and a --help that lists the command's own flags first and a robot's fields only for the chosen --robot.type."""
+meant, and a --help that lists the command's own flags first and a robot's fields only for the chosen --robot.type;
+and the scripts' argparse parser, whose errors are one line too."""
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import difflib
 import re
@@ -18,6 +20,13 @@ from draccus.wrappers.docstring import get_attribute_docstring
 from lerobot_contrast.contrast.errors import UserError
 
 HELP = ("--help", "-h")
+
+
+class ScriptParser(argparse.ArgumentParser):
+    """argparse for the scripts under scripts/: a bad flag is one line, `error: ...`, and exit status 2."""
+
+    def error(self, message: str) -> typing.NoReturn:
+        self.exit(2, f"error: {message}\n")
 
 
 class ConfigError(UserError):

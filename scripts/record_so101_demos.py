@@ -19,9 +19,10 @@ import os
 import shlex
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+from lerobot_contrast.flags import ScriptParser
 
 REPO_ID = "local/so101_demos"
 
@@ -68,7 +69,7 @@ def record(args: argparse.Namespace, twin, done: int) -> int:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ScriptParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0, help="the cubes' placements, episode by episode")
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--output", type=Path, required=True, help="the dataset's folder")
@@ -104,23 +105,17 @@ def main(argv: list[str] | None = None) -> int:
     done = recorded(args.output)
     if done < args.episodes:
         os.environ.setdefault("HF_HUB_OFFLINE", "1")
-        from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+        from lerobot_teleoperator_so101_demo.launch import running_twin
 
-        with tempfile.TemporaryDirectory() as calibration:
-            flags = [f"--seed={args.seed}", f"--calibration_dir={calibration}", f"--camera_port={free_port()}",
-                     f"--control_port={free_port()}", f"--fps={args.fps}", f"--width={args.width}",
-                     f"--height={args.height}"]  # fmt: skip
-            try:
-                twin = start_twin(*flags)
-            except UserError as error:
-                print(f"error: {error}", file=sys.stderr)
-                return 2
-            began = time.monotonic()
-            try:
+        flags = [f"--seed={args.seed}", f"--fps={args.fps}", f"--width={args.width}", f"--height={args.height}"]
+        try:
+            with running_twin(*flags) as twin:
+                began = time.monotonic()
                 status = record(args, twin, done)
-            finally:
-                twin.stop()
-            spent = time.monotonic() - began
+                spent = time.monotonic() - began
+        except UserError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
         if status != 0:
             print(f"error: lerobot-record stopped ({status}); run the same command again to go on", file=sys.stderr)
             return 1

@@ -19,9 +19,10 @@ import os
 import shlex
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+from lerobot_contrast.flags import ScriptParser
 
 POLICIES = ("act", "demonstrator")
 
@@ -56,7 +57,7 @@ def trials(run_dir: Path) -> int:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ScriptParser(description=__doc__.splitlines()[0])
     parser.add_argument("--checkpoint", type=Path, help="ACT's pretrained_model directory (for --policies=act)")
     parser.add_argument("--output", type=Path, required=True, help="the study's folder: one run per policy")
     parser.add_argument("--n_instances", type=int, default=30, help="bases (each with its perturbations)")
@@ -73,37 +74,31 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error(f"--policies: {','.join(unknown) or 'none given'}; choose from {','.join(POLICIES)}")
     if args.n_instances < 1 or args.max_episode_s <= 0:
         parser.error("--n_instances must be at least 1 and --max_episode_s above 0")
+    if "act" in args.policies and args.checkpoint is None:
+        parser.error("--policies=act needs --checkpoint: lerobot-train's pretrained_model directory")
+    if "act" in args.policies and not (args.checkpoint / "config.json").is_file():
+        parser.error(f"--checkpoint={args.checkpoint} holds no config.json; give lerobot-train's pretrained_model")
     if args.checkpoint is not None:  # lerobot-train's `last` moves on as training goes on: the run names the step
         args.checkpoint = args.checkpoint.resolve()
-    if "act" in args.policies and (args.checkpoint is None or not (args.checkpoint / "config.json").is_file()):
-        parser.error(f"--checkpoint={args.checkpoint} holds no config.json; give lerobot-train's pretrained_model")
     return args
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
-    from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+    from lerobot_teleoperator_so101_demo.launch import running_twin
 
     from lerobot_contrast.contrast.errors import UserError
+    from lerobot_contrast.domains.task_file import load_task_file
+    from lerobot_contrast.twin.operator import Placement
+    from lerobot_contrast.twin.scene import start_poses
 
     width, height = (args.width, args.height) if args.checkpoint is None else frame_size(args.checkpoint)
     began = time.monotonic()
     runs = [args.output / policy for policy in args.policies]
-    with tempfile.TemporaryDirectory() as calibration:
-        flags = ["--task=so101_red_left", f"--seed={args.seed}", f"--calibration_dir={calibration}",
-                 f"--camera_port={free_port()}", f"--control_port={free_port()}", "--fps=30", f"--width={width}",
-                 f"--height={height}"]  # fmt: skip
-        try:
-            twin = start_twin(*flags)
-        except UserError as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
-        try:
-            from lerobot_contrast.domains.task_file import load_task_file
-            from lerobot_contrast.twin.operator import Placement
-            from lerobot_contrast.twin.scene import start_poses
-
+    flags = ["--task=so101_red_left", f"--seed={args.seed}", "--fps=30", f"--width={width}", f"--height={height}"]
+    try:
+        with running_twin(*flags) as twin:
             placement = Placement(twin.placement)  # the objects wait in their storage row, where the plan starts
             for name, pose in start_poses(load_task_file("so101_red_left").spec, None).items():
                 placement.place(name, pose.x, pose.y)
@@ -113,8 +108,9 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"error: the {policy} run stopped ({status}); run the same command again to resume",
                           file=sys.stderr)  # fmt: skip
                     return 1
-        finally:
-            twin.stop()
+    except UserError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     report = args.output / "report"
     every = [args.output / policy for policy in POLICIES if (args.output / policy / "journal.jsonl").is_file()]
     subprocess.run([sys.executable, "-m", "lerobot_contrast.report", *map(str, every), f"--output_dir={report}"],

@@ -25,6 +25,8 @@ import sys
 import time
 from pathlib import Path
 
+from lerobot_contrast.flags import ScriptParser
+
 REPO_ID = "local/so101_demos"
 RECIPE = (
     "--policy.type=act",
@@ -84,7 +86,7 @@ def parse_args(argv: list[str] | None = None) -> tuple[argparse.Namespace, list[
     argv = list(sys.argv[1:] if argv is None else argv)
     extra = argv[argv.index("--") + 1 :] if "--" in argv else []
     argv = argv[: argv.index("--")] if "--" in argv else argv
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ScriptParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dataset", type=Path, required=True, help="the LeRobotDataset record_so101_demos.py wrote")
     parser.add_argument("--output", type=Path, required=True, help="lerobot-train's output directory")
     parser.add_argument("--steps", type=int, default=6000, help="total gradient steps, counting those already done")

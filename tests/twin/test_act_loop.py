@@ -3,6 +3,8 @@ scripted demonstrator, `lerobot-train --policy.type=act`, then a contrast-set ev
 demonstrator, which reads the words) with the scripted operator at the console."""
 
 import json
+import subprocess
+import sys
 
 import pytest
 from lerobot_teleoperator_so101_demo import plan
@@ -10,9 +12,33 @@ from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
 
 from lerobot_contrast.domains.task_file import load_task_file
 from lerobot_contrast.twin import arm
-from tests.study_scripts import load_script
+from tests.study_scripts import SCRIPTS, load_script
 
 INSTRUCTION = "put the red cube in the left bin"
+
+
+@pytest.mark.parametrize(
+    ("script", "flags", "said"),
+    [
+        ("record_so101_demos", ["--output=demos", "--episodes=0"], "--episodes must be at least 1"),
+        (
+            "train_so101_act",
+            ["--dataset=nowhere", "--output=act"],
+            "--dataset=nowhere holds no LeRobot dataset; record",
+        ),
+        ("train_so101_act", ["--dataset=d", "--output=act", "--steps=0"], "--steps, --batch_size and --save_freq must"),
+        ("train_so101_act", ["--output=act"], "the following arguments are required: --dataset"),
+        ("study_so101_act", ["--output=s", "--policies=foo"], "--policies: foo; choose from act,demonstrator"),
+        ("study_so101_act", ["--output=s", "--policies=act"], "--policies=act needs --checkpoint: lerobot-train's"),
+        ("study_so101_act", ["--output=s", "--checkpoint=nowhere"], "--checkpoint=nowhere holds no config.json"),
+        ("study_so101_act", ["--output=s", "--n_instances=0"], "--n_instances must be at least 1"),
+    ],
+)
+def test_the_loops_scripts_answer_bad_flags_in_one_line(script, flags, said, tmp_path):
+    done = subprocess.run([sys.executable, SCRIPTS / f"{script}.py", *flags], capture_output=True, text=True,
+                          cwd=tmp_path, timeout=120)  # fmt: skip
+    assert done.returncode == 2 and done.stderr.startswith(f"error: {said}"), done.stderr
+    assert done.stderr.count("\n") == 1
 
 
 @pytest.mark.slow
@@ -57,6 +83,8 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
     for policy in ("act", "demonstrator"):
         records = [json.loads(line) for line in (out / policy / "journal.jsonl").read_text().splitlines()]
         assert [r["status"] for r in records] == ["done"] * len(records) and len(records) >= 4
-        assert records[0]["instance"]["instruction"] == INSTRUCTION  # the base says the recorded task; its perturbations follow
+        assert (
+            records[0]["instance"]["instruction"] == INSTRUCTION
+        )  # the base says the recorded task; its perturbations follow
         assert {r["perturbation"] for r in records[1:]} >= {"L", "LB2", "LB3", "SB"}
     assert "ΔLB3" in (out / "report" / "report.md").read_text()

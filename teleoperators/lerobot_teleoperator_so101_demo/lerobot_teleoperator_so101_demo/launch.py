@@ -3,12 +3,14 @@ prints, for the recording script, the benchmark and the tests."""
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
 import typing
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 from lerobot_contrast.contrast.errors import UserError
@@ -71,3 +73,16 @@ def start_twin(*flags: str) -> RunningTwin:
         key, _, value = line.partition(": ")
         endpoints[key] = value.strip()
     return RunningTwin(process, endpoints, log)
+
+
+@contextlib.contextmanager
+def running_twin(*flags: str) -> Iterator[RunningTwin]:
+    """A twin started with `flags` on free ports, with a calibration folder of its own, stopped on leaving; a twin
+    that cannot start is a UserError of one line."""
+    with tempfile.TemporaryDirectory() as calibration:
+        twin = start_twin(f"--calibration_dir={calibration}", f"--camera_port={free_port()}",
+                          f"--control_port={free_port()}", *flags)  # fmt: skip
+        try:
+            yield twin
+        finally:
+            twin.stop()
