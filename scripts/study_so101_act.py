@@ -5,7 +5,12 @@ scripted demonstrator, which reads the words, runs the same plan as the referenc
 left it; the report compares the two.
 
     python scripts/study_so101_act.py --checkpoint=DIR --output=DIR [--n_instances=30] [--max_episode_s=12]
-        [--policies=act,demonstrator] [--placement_error=none] [--width=160 --height=120]
+        [--policies=act,demonstrator] [--compare=DIR --policies=ab] [--placement_error=none]
+        [--width=160 --height=120]
+
+With `--policies=ab`, --checkpoint and --compare (a second ACT: more data, or trained longer) run one interleaved
+session (`--policies=A,B` of the evaluator) on the same bases, stopped as soon as the sequential test tells them
+apart (`--stop.decided=true`); its report says after how many bases.
 
 The twin's camera renders at the checkpoint's own frame size (what the policy was recorded with); without ACT,
 at --width x --height. The report covers every policy's run in the folder, so the two runs may be made apart.
@@ -24,7 +29,7 @@ from pathlib import Path
 
 from lerobot_contrast.flags import ScriptParser
 
-POLICIES = ("act", "demonstrator")
+POLICIES = ("act", "demonstrator", "ab")
 
 
 def frame_size(checkpoint: Path) -> tuple[int, int]:
@@ -38,9 +43,12 @@ def frame_size(checkpoint: Path) -> tuple[int, int]:
 
 
 def eval_command(args: argparse.Namespace, twin, policy: str, run_dir: Path) -> list[str]:
-    chosen = ([f"--policy.path={args.checkpoint}", "--policy.device=cpu"] if policy == "act"
-              else ["--policy.type=so101_demonstrator", f"--policy.placement={twin.placement}"])  # fmt: skip
-    if (run_dir / "config.json").is_file():  # a killed run: the evaluator's own resume, on this twin's new ports
+    chosen = {
+        "act": [f"--policy.path={args.checkpoint}", "--policy.device=cpu"],
+        "demonstrator": ["--policy.type=so101_demonstrator", f"--policy.placement={twin.placement}"],
+        "ab": [f"--policies={args.checkpoint}:device=cpu,{args.compare}:device=cpu", "--stop.decided=true"],
+    }[policy]
+    if started(run_dir):  # a killed run: the evaluator's own resume, on this twin's new ports
         flags = ["--resume=true", f"--output_dir={run_dir}", *shlex.split(twin.robot_flags), *chosen]
     else:
         flags = [*shlex.split(twin.robot_flags), *chosen, "--task=so101_red_left", "--strategy=contrast",
@@ -51,18 +59,25 @@ def eval_command(args: argparse.Namespace, twin, policy: str, run_dir: Path) -> 
             f"--placement_error={args.placement_error}", *flags]  # fmt: skip
 
 
+def started(run_dir: Path) -> bool:
+    """Whether the run (or the interleaved session) was begun, and so is resumed."""
+    return (run_dir / "config.json").is_file() or (run_dir / "pairs.json").is_file()
+
+
 def trials(run_dir: Path) -> int:
-    journal = run_dir / "journal.jsonl"
-    return len(journal.read_text().splitlines()) if journal.is_file() else 0
+    """Episodes the run recorded (an interleaved session: every policy's)."""
+    return sum(len(journal.read_text().splitlines()) for journal in run_dir.glob("**/journal.jsonl"))
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = ScriptParser(description=__doc__.splitlines()[0])
     parser.add_argument("--checkpoint", type=Path, help="ACT's pretrained_model directory (for --policies=act)")
+    parser.add_argument("--compare", type=Path, help="a second ACT checkpoint, against --checkpoint (--policies=ab)")
     parser.add_argument("--output", type=Path, required=True, help="the study's folder: one run per policy")
     parser.add_argument("--n_instances", type=int, default=30, help="bases (each with its perturbations)")
     parser.add_argument("--max_episode_s", type=float, default=12.0, help="as long as a recorded episode")
-    parser.add_argument("--policies", default=",".join(POLICIES), help="which of act,demonstrator to run")
+    parser.add_argument("--policies", default="act,demonstrator",
+                        help="which of act, demonstrator and ab (--checkpoint against --compare, interleaved) to run")  # fmt: skip
     parser.add_argument("--placement_error", default="none", help="the scripted operator's: none or normal:SIGMA")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--width", type=int, default=160, help="the camera's frame without a checkpoint")
@@ -74,12 +89,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error(f"--policies: {','.join(unknown) or 'none given'}; choose from {','.join(POLICIES)}")
     if args.n_instances < 1 or args.max_episode_s <= 0:
         parser.error("--n_instances must be at least 1 and --max_episode_s above 0")
-    if "act" in args.policies and args.checkpoint is None:
-        parser.error("--policies=act needs --checkpoint: lerobot-train's pretrained_model directory")
-    if "act" in args.policies and not (args.checkpoint / "config.json").is_file():
-        parser.error(f"--checkpoint={args.checkpoint} holds no config.json; give lerobot-train's pretrained_model")
-    if args.checkpoint is not None:  # lerobot-train's `last` moves on as training goes on: the run names the step
-        args.checkpoint = args.checkpoint.resolve()
+    needs = {"checkpoint": {"act", "ab"}, "compare": {"ab"}}
+    for flag, policies in needs.items():
+        path, needed = getattr(args, flag), sorted(policies & set(args.policies))
+        if needed and path is None:
+            parser.error(f"--policies={needed[0]} needs --{flag}: lerobot-train's pretrained_model directory")
+        if needed and not (path / "config.json").is_file():
+            parser.error(f"--{flag}={path} holds no config.json; give lerobot-train's pretrained_model")
+        if path is not None:  # lerobot-train's `last` moves on as training goes on: the run names the step
+            setattr(args, flag, path.resolve())
     return args
 
 
@@ -99,10 +117,11 @@ def main(argv: list[str] | None = None) -> int:
     flags = ["--task=so101_red_left", f"--seed={args.seed}", "--fps=30", f"--width={width}", f"--height={height}"]
     try:
         with running_twin(*flags) as twin:
-            placement = Placement(twin.placement)  # the objects wait in their storage row, where the plan starts
-            for name, pose in start_poses(load_task_file("so101_red_left").spec, None).items():
-                placement.place(name, pose.x, pose.y)
+            placement, storage = Placement(twin.placement), start_poses(load_task_file("so101_red_left").spec, None)
             for policy, run_dir in zip(args.policies, runs, strict=True):
+                if not started(run_dir):  # the objects wait in their storage row, where a new run's plan starts
+                    for name, pose in storage.items():
+                        placement.place(name, pose.x, pose.y)
                 status = subprocess.run(eval_command(args, twin, policy, run_dir)).returncode
                 if status != 0:
                     print(f"error: the {policy} run stopped ({status}); run the same command again to resume",
@@ -112,9 +131,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     report = args.output / "report"
-    every = [args.output / policy for policy in POLICIES if (args.output / policy / "journal.jsonl").is_file()]
-    subprocess.run([sys.executable, "-m", "lerobot_contrast.report", *map(str, every), f"--output_dir={report}"],
-                   check=True)  # fmt: skip
+    every = [args.output / p for p in ("act", "demonstrator") if (args.output / p / "journal.jsonl").is_file()]
+    if every:
+        subprocess.run([sys.executable, "-m", "lerobot_contrast.report", *map(str, every), f"--output_dir={report}"],
+                       check=True)  # fmt: skip
+    if "ab" in args.policies:  # the interleaved session's own report: the paired comparison and when it was decided
+        subprocess.run([sys.executable, "-m", "lerobot_contrast.report", str(args.output / "ab")], check=True)
     print(f"runs={len(runs)} trials={sum(trials(r) for r in runs)} wall_s={time.monotonic() - began:.0f} "
           f"report={report / 'report.md'}")  # fmt: skip
     return 0

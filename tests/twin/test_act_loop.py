@@ -32,6 +32,7 @@ INSTRUCTION = "put the red cube in the left bin"
         ("study_so101_act", ["--output=s", "--policies=act"], "--policies=act needs --checkpoint: lerobot-train's"),
         ("study_so101_act", ["--output=s", "--checkpoint=nowhere"], "--checkpoint=nowhere holds no config.json"),
         ("study_so101_act", ["--output=s", "--n_instances=0"], "--n_instances must be at least 1"),
+        ("study_so101_act", ["--output=s", "--policies=ab", "--checkpoint=."], "--checkpoint=. holds no config.json"),
     ],
 )
 def test_the_loops_scripts_answer_bad_flags_in_one_line(script, flags, said, tmp_path):
@@ -88,3 +89,11 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
         )  # the base says the recorded task; its perturbations follow
         assert {r["perturbation"] for r in records[1:]} >= {"L", "LB2", "LB3", "SB"}
     assert "ΔLB3" in (out / "report" / "report.md").read_text()
+
+    # Two checkpoints of one training (2 and 3 steps), interleaved on the same bases, as after a second round of data.
+    first = tmp_path / "act" / "checkpoints" / "000002" / "pretrained_model"
+    flags = [f"--checkpoint={first}", f"--compare={checkpoint}", "--policies=ab", "--n_instances=1"]
+    assert study.main([*flags, f"--output={out}", "--max_episode_s=1"]) == 0
+    pairs = json.loads((out / "ab" / "pairs.json").read_text())
+    assert len(pairs["policies"]) == 2
+    assert (out / "ab" / "report" / "report.md").is_file()
