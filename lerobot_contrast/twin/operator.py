@@ -15,7 +15,7 @@ import re
 import subprocess
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +30,7 @@ REPLY_TIMEOUT_MS = 5000
 # the staging check reads it at Enter (measured on the twin: the frame read at once still showed the old pose).
 SETTLE_S = 0.5
 STRAY_M = 0.01  # an object this far from where the trial starts it was moved: put it back
+LIFTED_M = 0.02  # an object this far above where it rested when staged is held, not put down
 WHERE = r"\((?:off the workspace|[+-]\d+\.\d+, [+-]\d+\.\d+)\)"
 TRIAL = re.compile(r"trial (\d+)/(\d+) · ")
 MOVE = re.compile(rf"^\W*(\w+)\s*[│|]\s*({WHERE})\s*[│|]\s*({WHERE})\s*[│|]")
@@ -106,6 +107,10 @@ class Placement:
         objects = self.ask({"cmd": "scene"})["objects"]
         return Scene({name: Pose(*pose) for name, pose in objects.items()})
 
+    def heights(self) -> dict[str, float]:
+        """Each object's height (m): what tells an object resting from one held in the gripper."""
+        return self.ask({"cmd": "scene"})["z"]
+
 
 def _pose(text: str) -> tuple[float, float] | None:
     numbers = re.findall(r"[+-]\d+\.\d+", text)
@@ -130,13 +135,17 @@ class Plan:
         self.instances = {r.index: r.instance for r in preview(planned) if r.instance is not None}
         self.parking = start_poses(self.task.spec, None)  # where the twin keeps objects off the workspace
 
-    def judge(self, index: int, instruction: str, scene: Scene) -> bool:
+    def judge(self, index: int, instruction: str, scene: Scene, lifted: Collection[str] = ()) -> bool:
+        """Whether trial `index` reached its goal in `scene`; an object still `lifted` (in the gripper) is not
+        placed, wherever it hangs."""
         instance = self.instances.get(index)
         if instance is None or instance.instruction != instruction:
             raise OperatorError(
                 f"trial {index + 1} says {instruction!r}, which the plan does not: run the operator with the same "
                 "eval flags"
             )
+        if (instance.goal.get("predicate") or {}).get("subject") in lifted:
+            return False
         return self.task.is_achieved(instance, scene)
 
 
@@ -151,6 +160,7 @@ class Operator:
         self.flagged: list[str] = []
         self.fixes = 0
         self.placed: list[dict] = []  # every placement made: object, target, where it was put
+        self.resting: dict[str, float] = {}  # each object's height as staged, resting on the table
         self.said: list[str] = []  # what the operator reports beside its answers
 
     def read(self, line: str) -> str | None:
@@ -173,6 +183,7 @@ class Operator:
             moved = {name: pose.distance_to(after.objects[name]) for name, pose in before.objects.items()}
             each = ", ".join(f"{name} {distance:.3f}" for name, distance in moved.items() if distance > 0.001)
             self.said.append(f"moved {sum(moved.values()):.3f} m (the twin's truth: {each})")
+            self.resting = self.placement.heights()
             if strays:  # as a person who put back what the robot moved says so: what was moved, all told
                 self.said.append(f"put back {', '.join(strays)}, which the console said to leave")
                 return f"c {sum(moved.values()):.3f}"
@@ -186,7 +197,11 @@ class Operator:
             self.flagged = []
             return "a"
         elif OUTCOME_PROMPT in line:
-            return "y" if self.plan.judge(self.index, self.instruction, self.placement.scene()) else "n"
+            lifted = {name: z - self.resting[name] for name, z in self.placement.heights().items()
+                      if name in self.resting and z - self.resting[name] > LIFTED_M}  # fmt: skip
+            for name, up in lifted.items():
+                self.said.append(f"{name} is held {up * 100:.1f} cm up, not put down")
+            return "y" if self.plan.judge(self.index, self.instruction, self.placement.scene(), lifted) else "n"
         elif ABORTED_PROMPT in line:
             return ""
         return None

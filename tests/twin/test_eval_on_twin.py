@@ -125,12 +125,16 @@ class FakePlacement:
 
     def __init__(self, scene: Scene):
         self.placed, self.reported = {}, scene
+        self.z = dict.fromkeys(scene.objects, 0.0125)  # resting on the table
 
     def place(self, name: str, x: float, y: float) -> None:
         self.placed[name] = (x, y)
 
     def scene(self) -> Scene:
         return self.reported
+
+    def heights(self) -> dict[str, float]:
+        return dict(self.z)
 
 
 CONSOLE = """\
@@ -182,6 +186,23 @@ def test_what_the_robot_moved_and_the_console_says_to_leave_is_put_back_and_repo
     back = start["red_cube"]
     assert placement.placed == {"red_cube": pytest.approx((back.x, back.y))}
     assert typed == [f"c {in_bin.distance_to(back):.3f}"]  # the metres moved, as a person types them
+
+
+def test_a_cube_still_held_over_its_goal_when_the_episode_ends_is_a_failure():
+    plan = Plan([*RUN, "--robot.type=so101_follower", "--robot.port=unused"])
+    start = plan.instances[0].scene.objects
+    placement = FakePlacement(Scene(dict(start)))
+    scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="accept")
+    console = CONSOLE.replace("│ red_cube │ 4.1 cm off │\n", "").splitlines()
+    typed = [answer for line in console[:-1] if (answer := scripted.read(line)) is not None]
+    assert typed == ["", "a"]  # staged, and what the camera flagged accepted
+    green = start["green_cube"]  # the goal holds by x and y: the red cube hangs right beside the green one
+    placement.reported = Scene({**start, "red_cube": Pose(green.x + 0.04, green.y)})
+    placement.z["red_cube"] += 0.06  # ... in the gripper, 6 cm up
+    assert scripted.read(console[-1]) == "n"
+    assert scripted.said[-1] == "red_cube is held 6.0 cm up, not put down"
+    placement.z["red_cube"] -= 0.06  # let go: now it rests there
+    assert scripted.read(console[-1]) == "y"
 
 
 def test_the_operators_bad_input_is_one_line():
