@@ -57,7 +57,7 @@ def record_command(args: argparse.Namespace, twin, done: int) -> list[str]:
     ]
 
 
-def record(args: argparse.Namespace, twin, done: int) -> int:
+def record(args: argparse.Namespace, twin) -> int:
     """Run lerobot-record until the episodes are in, resuming after a failed run: on a loaded machine the twin's bus
     sometimes misses LeRobot's 50 ms reply deadline, which stops lerobot-record (the saved episodes stay)."""
     status = 0
@@ -111,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             with running_twin(*flags) as twin:
                 began = time.monotonic()
-                status = record(args, twin, done)
+                status = record(args, twin)
                 spent = time.monotonic() - began
         except UserError as error:
             print(f"error: {error}", file=sys.stderr)

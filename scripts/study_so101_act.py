@@ -49,7 +49,8 @@ def eval_command(args: argparse.Namespace, twin, policy: str, run_dir: Path) -> 
         "ab": [f"--policies={args.checkpoint}:device=cpu,{args.compare}:device=cpu", "--stop.decided=true"],
     }[policy]
     if started(run_dir):  # a killed run: the evaluator's own resume, on this twin's new ports
-        flags = ["--resume=true", f"--output_dir={run_dir}", *shlex.split(twin.robot_flags), *chosen]
+        new_port = chosen if policy == "demonstrator" else []  # its placement socket moved with the twin
+        flags = ["--resume=true", f"--output_dir={run_dir}", *shlex.split(twin.robot_flags), *new_port]
     else:
         flags = [*shlex.split(twin.robot_flags), *chosen, "--task=so101_red_left", "--strategy=contrast",
                  f"--n_instances={args.n_instances}", f"--max_episode_s={args.max_episode_s}", "--fps=30",

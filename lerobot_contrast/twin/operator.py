@@ -104,12 +104,12 @@ class Placement:
         self.ask({"cmd": "place", "object": name, "x": float(x), "y": float(y)})
 
     def scene(self) -> Scene:
-        objects = self.ask({"cmd": "scene"})["objects"]
-        return Scene({name: Pose(*pose) for name, pose in objects.items()})
+        return self.look()[0]
 
-    def heights(self) -> dict[str, float]:
-        """Each object's height (m): what tells an object resting from one held in the gripper."""
-        return self.ask({"cmd": "scene"})["z"]
+    def look(self) -> tuple[Scene, dict[str, float]]:
+        """The true scene, and each object's height (m): what tells an object resting from one held in the gripper."""
+        reply = self.ask({"cmd": "scene"})
+        return Scene({name: Pose(*pose) for name, pose in reply["objects"].items()}), reply["z"]
 
 
 def _pose(text: str) -> tuple[float, float] | None:
@@ -176,14 +176,12 @@ class Operator:
             self.flagged.append(found.group(1))
         elif STAGED_PROMPT in line:
             before = self.placement.scene()
-            self._place(self.moves)
             strays = self._strays(before)
-            self._place(strays)
-            after = self.placement.scene()
+            self._place({**self.moves, **strays})
+            after, self.resting = self.placement.look()
             moved = {name: pose.distance_to(after.objects[name]) for name, pose in before.objects.items()}
             each = ", ".join(f"{name} {distance:.3f}" for name, distance in moved.items() if distance > 0.001)
             self.said.append(f"moved {sum(moved.values()):.3f} m (the twin's truth: {each})")
-            self.resting = self.placement.heights()
             if strays:  # as a person who put back what the robot moved says so: what was moved, all told
                 self.said.append(f"put back {', '.join(strays)}, which the console said to leave")
                 return f"c {sum(moved.values()):.3f}"
@@ -197,11 +195,12 @@ class Operator:
             self.flagged = []
             return "a"
         elif OUTCOME_PROMPT in line:
-            lifted = {name: z - self.resting[name] for name, z in self.placement.heights().items()
+            scene, heights = self.placement.look()
+            lifted = {name: z - self.resting[name] for name, z in heights.items()
                       if name in self.resting and z - self.resting[name] > LIFTED_M}  # fmt: skip
             for name, up in lifted.items():
                 self.said.append(f"{name} is held {up * 100:.1f} cm up, not put down")
-            return "y" if self.plan.judge(self.index, self.instruction, self.placement.scene(), lifted) else "n"
+            return "y" if self.plan.judge(self.index, self.instruction, scene, lifted) else "n"
         elif ABORTED_PROMPT in line:
             return ""
         return None

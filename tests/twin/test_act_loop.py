@@ -53,7 +53,7 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
     twin = start_twin(f"--calibration_dir={tmp_path}", f"--camera_port={free_port()}", f"--control_port={free_port()}",
                       "--width=96", "--height=72", "--seed=5")  # fmt: skip
     try:
-        assert record.record(args, twin, 0) == 0
+        assert record.record(args, twin) == 0
         from lerobot_contrast.twin.placement import request
 
         scene = request({"cmd": "scene"}, int(twin.placement.rsplit(":", 1)[1]))["objects"]

@@ -133,8 +133,8 @@ class FakePlacement:
     def scene(self) -> Scene:
         return self.reported
 
-    def heights(self) -> dict[str, float]:
-        return dict(self.z)
+    def look(self) -> tuple[Scene, dict[str, float]]:
+        return self.scene(), dict(self.z)
 
 
 CONSOLE = """\

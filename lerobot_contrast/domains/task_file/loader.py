@@ -149,7 +149,7 @@ def _base_slots(node: Node | None, templates) -> dict[str, str]:
             )
         if fixed[name] not in allowed:
             child.fail(f"{fixed[name]!r} is not allowed in slot {name!r}; expected one of: {', '.join(allowed)}")
-    if not any(all(n in t.slots and v in t.slots[n].candidates for n, v in fixed.items()) for t in templates.values()):
+    if not any(template.takes(fixed) for template in templates.values()):
         node.fail("no single template has all these slots with these values; fix fewer slots")
     return fixed
 

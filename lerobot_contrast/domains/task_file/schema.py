@@ -96,6 +96,10 @@ class Template:
     reference: float | str | None = None  # metres, "straight_line", or None (no SPL)
     weight: float = 1.0
 
+    def takes(self, values: Mapping[str, str]) -> bool:
+        """Whether every slot named in `values` is one of this template's and may hold its value."""
+        return all(name in self.slots and value in self.slots[name].candidates for name, value in values.items())
+
 
 @dataclass(frozen=True)
 class ListedInstance:
@@ -141,8 +145,7 @@ class TaskSpec:
 
     def fits_bases(self, template: Template) -> bool:
         """Whether `template` can give a base with every slot `sampler.slots` fixes."""
-        return all(name in template.slots and value in template.slots[name].candidates
-                   for name, value in self.base_slots.items())  # fmt: skip
+        return template.takes(self.base_slots)
 
     def words(self, name: str) -> tuple[str, ...]:
         """How the instructions may refer to an object or region; the first is the plain one."""
