@@ -22,6 +22,11 @@ INSTRUCTION = "put the red cube in the left bin"
     [
         ("record_so101_demos", ["--output=demos", "--episodes=0"], "--episodes must be at least 1"),
         (
+            "record_so101_demos",
+            ["--output=demos", "--episodes=2", "--shards=3"],
+            "--shards=3: give from 1 to --episodes",
+        ),
+        (
             "train_so101_act",
             ["--dataset=nowhere", "--output=act"],
             "--dataset=nowhere holds no LeRobot dataset; record",
@@ -48,12 +53,13 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
 
     record = load_script("record_so101_demos")
     demos = tmp_path / "demos"
-    args = record.parse_args([f"--output={demos}", "--episodes=2", "--reset_time_s=0.5", "--episode_time_s=8", "--pace=1",
-                              "--width=96", "--height=72", "--seed=5"])  # fmt: skip
+    shape = ["--episodes=2", "--reset_time_s=0.5", "--episode_time_s=8", "--pace=1", "--width=96", "--height=72",
+             "--seed=5"]  # fmt: skip
+    args = record.parse_args([f"--output={demos}", *shape])
     twin = start_twin(f"--calibration_dir={tmp_path}", f"--camera_port={free_port()}", f"--control_port={free_port()}",
                       "--width=96", "--height=72", "--seed=5")  # fmt: skip
     try:
-        assert record.record(args, twin) == 0
+        assert record.record(args, twin, demos, 0, 2) == 0
         from lerobot_contrast.twin.placement import request
 
         scene = request({"cmd": "scene"}, int(twin.placement.rsplit(":", 1)[1]))["objects"]
@@ -68,6 +74,19 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
     second = plan.placement(load_task_file("so101_blocks").spec, 5, 1)
     for name in ("green_cube", "blue_cube"):
         assert scene[name][:2] == pytest.approx(second[name][:2], abs=0.01)
+    # The same episodes recorded by two twins side by side, one each, then joined: each keeps its placement and place.
+    sharded = tmp_path / "sharded"
+    assert record.main([f"--output={sharded}", "--shards=2", *shape]) == 0
+    joined = LeRobotDataset(record.REPO_ID, root=sharded)
+    assert joined.num_episodes == 2 and not record.shard_root(sharded).exists()
+
+    def first_frame(data, episode):
+        return data[data.meta.episodes["dataset_from_index"][episode]]["observation.images.front"]
+
+    for episode in (0, 1):
+        own = (first_frame(joined, episode) - first_frame(dataset, episode)).abs().mean()
+        other = (first_frame(joined, episode) - first_frame(dataset, 1 - episode)).abs().mean()
+        assert own < other, (episode, own, other)
 
     train = load_script("train_so101_act")
     flags = [f"--dataset={demos}", f"--output={tmp_path / 'act'}", "--batch_size=2", "--save_freq=2", "--num_workers=0"]
