@@ -42,3 +42,33 @@ def test_cells_spread_over_the_nodes_of_a_cluster_and_their_results_are_gathered
     finally:
         ray.shutdown()
         cluster.shutdown()
+
+
+def test_a_head_that_cannot_start_a_client_server_is_tried_again_then_named_in_one_line(monkeypatch):
+    from lerobot_contrast.sweep import cluster as joining
+    from lerobot_contrast.sweep.settings import RayArgs
+
+    failure = "Initialization failure from server:\nTraceback ...\nRuntimeError: Starting Ray client server failed."
+    tries, failing = [], {"times": 2}
+
+    def init(**kwargs):
+        tries.append(kwargs["address"])
+        if len(tries) <= failing["times"]:
+            raise ConnectionAbortedError(failure)
+
+    monkeypatch.setattr(joining, "reach", lambda given: "head:10001")
+    monkeypatch.setattr(joining, "runtime_env", lambda: {})
+    monkeypatch.setattr(joining, "CLIENT_RETRY_S", 0.0)
+    monkeypatch.setattr(joining.ray, "init", init)
+    monkeypatch.setattr(joining.ray, "shutdown", lambda: None)
+    monkeypatch.setattr(joining.ray, "is_initialized", lambda: False)
+    joining.join(RayArgs(address="ray://head:10001"))
+    assert tries == ["ray://head:10001"] * 3  # two failed starts, then joined
+
+    tries.clear()
+    failing["times"] = joining.CLIENT_START_TRIES
+    with pytest.raises(joining.ClusterError) as error:
+        joining.join(RayArgs(address="ray://head:10001"))
+    assert len(tries) == joining.CLIENT_START_TRIES
+    assert str(error.value).startswith("--ray.address=ray://head:10001: cannot join (Initialization failure")
+    assert "Starting Ray client server failed" in str(error.value) and "\n" not in str(error.value)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import logging
 import os
 import socket
+import time
 from pathlib import Path
 
 import ray
@@ -15,6 +16,10 @@ from lerobot_contrast.sweep.settings import RayArgs
 from lerobot_contrast.sweep.shipping import runtime_env
 
 PROBE_S = 3.0
+# Ray Client's server on the head starts a server process of its own for each driver; on a loaded head that start
+# sometimes fails ("Starting Ray client server failed"), and the next try gets a fresh one.
+CLIENT_START_TRIES = 3
+CLIENT_RETRY_S = 2.0
 CLIENT_PORT = 10001
 START_HEAD = "start one there with `ray start --head` (its client port is 10001, its cluster port 6379)"
 TOKEN_PLACES = (
@@ -47,13 +52,29 @@ def join(args: RayArgs) -> None:
     address = reach(args.address)
     try:
         target = args.address if args.address.startswith("ray://") else address
-        ray.init(address=target, runtime_env=runtime_env(), **quiet)
+        init_with_retries(address=target, runtime_env=runtime_env(), **quiet)
     except AUTH_ERROR:
         raise ClusterError(
             f"--ray.address={args.address}: the cluster refused this machine's token; {TOKEN_PLACES}"
         ) from None
     except ConnectionError as error:
         raise ClusterError(f"--ray.address={args.address}: cannot join ({' '.join(str(error).split())})") from None
+
+
+def init_with_retries(**init) -> None:
+    """`ray.init(**init)`, tried again when the head could not start this driver's Ray Client server."""
+    for attempt in range(1, CLIENT_START_TRIES + 1):
+        try:
+            ray.init(**init)
+            return
+        except ConnectionAbortedError as error:  # Ray Client's "Initialization failure from server"
+            if attempt == CLIENT_START_TRIES:
+                raise
+            logging.getLogger(__name__).warning(
+                "the Ray head could not start a client server (%s); trying again", str(error).splitlines()[-1]
+            )
+            ray.shutdown()
+            time.sleep(CLIENT_RETRY_S)
 
 
 def reach(given: str) -> str:
