@@ -198,6 +198,8 @@ class Operator:
             scene, heights = self.placement.look()
             lifted = {name: z - self.resting[name] for name, z in heights.items()
                       if name in self.resting and z - self.resting[name] > LIFTED_M}  # fmt: skip
+            where = ", ".join(f"{name} ({pose.x:.3f}, {pose.y:.3f})" for name, pose in scene.objects.items())
+            self.said.append(f"the trial ended with {where}")
             for name, up in lifted.items():
                 self.said.append(f"{name} is held {up * 100:.1f} cm up, not put down")
             return "y" if self.plan.judge(self.index, self.instruction, scene, lifted) else "n"

@@ -201,6 +201,8 @@ def test_a_cube_still_held_over_its_goal_when_the_episode_ends_is_a_failure():
     placement.z["red_cube"] += 0.06  # ... in the gripper, 6 cm up
     assert scripted.read(console[-1]) == "n"
     assert scripted.said[-1] == "red_cube is held 6.0 cm up, not put down"
+    ended = next(line for line in scripted.said if line.startswith("the trial ended with "))
+    assert f"red_cube ({green.x + 0.04:.3f}, {green.y:.3f})" in ended  # where each object is, for the study's log
     placement.z["red_cube"] -= 0.06  # let go: now it rests there
     assert scripted.read(console[-1]) == "y"
 
