@@ -12,6 +12,10 @@ With `--policies=ab`, --checkpoint and --compare (a second ACT: more data, or tr
 session (`--policies=A,B` of the evaluator) on the same bases, stopped as soon as the sequential test tells them
 apart (`--stop.decided=true`); its report says after how many bases.
 
+Each run's console and scripted operator are kept in OUTPUT/POLICY.log; `report/where_it_ended.md` then says, per
+perturbation, where each policy left the recorded task's cube (from the operator's view of the twin's true scene):
+what a policy that cannot read keys on.
+
 The twin's camera renders at the checkpoint's own frame size (what the policy was recorded with); without ACT,
 at --width x --height. The report covers every policy's run in the folder, so the two runs may be made apart.
 Prints `runs=.. trials=.. wall_s=.. report=..` last."""
@@ -58,6 +62,35 @@ def eval_command(args: argparse.Namespace, twin, policy: str, run_dir: Path) -> 
                  "--staging.viewer=none", f"--seed={args.seed}", f"--output_dir={run_dir}"]  # fmt: skip
     return [sys.executable, "-m", "lerobot_contrast.twin.operator", f"--placement={twin.placement}",
             f"--placement_error={args.placement_error}", *flags]  # fmt: skip
+
+
+def run_logged(command: list[str], log: Path) -> int:
+    """Run `command`, its output shown and appended line by line to `log` (a resumed run's lines follow the
+    killed one's)."""
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with (
+        log.open("a", buffering=1) as kept,
+        subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as child,
+    ):
+        for line in child.stdout:
+            sys.stdout.write(line)
+            kept.write(line)
+        return child.wait()
+
+
+def write_fates(output: Path, runs: list[Path], report: Path) -> None:
+    """report/where_it_ended.md: per policy and perturbation, where the recorded task's cube ended."""
+    from lerobot_contrast.domains.task_file import load_task_file
+    from lerobot_contrast.twin.fates import fates, fates_markdown
+
+    spec = load_task_file("so101_red_left").spec
+    subject, regions = spec.base_slots["block"], list(spec.templates["place"].slots["bin"].candidates)
+    parts = [f"# Where each policy left the {subject}\n"]
+    for run_dir in runs:
+        if (output / f"{run_dir.name}.log").is_file():
+            table = fates(run_dir, output / f"{run_dir.name}.log", spec, subject)
+            parts.append(f"## {run_dir.name}\n\n{fates_markdown(table, subject, regions)}")
+    (report / "where_it_ended.md").write_text("\n".join(parts), encoding="utf-8")
 
 
 def started(run_dir: Path) -> bool:
@@ -123,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
                 if not started(run_dir):  # the objects wait in their storage row, where a new run's plan starts
                     for name, pose in storage.items():
                         placement.place(name, pose.x, pose.y)
-                status = subprocess.run(eval_command(args, twin, policy, run_dir)).returncode
+                status = run_logged(eval_command(args, twin, policy, run_dir), args.output / f"{policy}.log")
                 if status != 0:
                     print(f"error: the {policy} run stopped ({status}); run the same command again to resume",
                           file=sys.stderr)  # fmt: skip
@@ -136,6 +169,7 @@ def main(argv: list[str] | None = None) -> int:
     if every:
         subprocess.run([sys.executable, "-m", "lerobot_contrast.report", *map(str, every), f"--output_dir={report}"],
                        check=True)  # fmt: skip
+        write_fates(args.output, every, report)
     if "ab" in args.policies:  # the interleaved session's own report: the paired comparison and when it was decided
         subprocess.run([sys.executable, "-m", "lerobot_contrast.report", str(args.output / "ab")], check=True)
     print(f"runs={len(runs)} trials={sum(trials(r) for r in runs)} wall_s={time.monotonic() - began:.0f} "

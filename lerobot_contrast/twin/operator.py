@@ -23,6 +23,7 @@ import zmq
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.twin.fates import ENDED, TRIAL
 
 DEFAULT_PLACEMENT = "tcp://127.0.0.1:5556"
 REPLY_TIMEOUT_MS = 5000
@@ -32,7 +33,6 @@ SETTLE_S = 0.5
 STRAY_M = 0.01  # an object this far from where the trial starts it was moved: put it back
 LIFTED_M = 0.02  # an object this far above where it rested when staged is held, not put down
 WHERE = r"\((?:off the workspace|[+-]\d+\.\d+, [+-]\d+\.\d+)\)"
-TRIAL = re.compile(r"trial (\d+)/(\d+) · ")
 MOVE = re.compile(rf"^\W*(\w+)\s*[│|]\s*({WHERE})\s*[│|]\s*({WHERE})\s*[│|]")
 OFF = re.compile(r"^\W*(\w+)\s*[│|]\s*(?:not seen|\d+\.\d+ cm off)")
 STAGED_PROMPT, CHECK_PROMPT = "Enter when staged", "Enter after fixing them"
@@ -199,7 +199,7 @@ class Operator:
             lifted = {name: z - self.resting[name] for name, z in heights.items()
                       if name in self.resting and z - self.resting[name] > LIFTED_M}  # fmt: skip
             where = ", ".join(f"{name} ({pose.x:.3f}, {pose.y:.3f})" for name, pose in scene.objects.items())
-            self.said.append(f"the trial ended with {where}")
+            self.said.append(f"{ENDED}{where}")
             for name, up in lifted.items():
                 self.said.append(f"{name} is held {up * 100:.1f} cm up, not put down")
             return "y" if self.plan.judge(self.index, self.instruction, scene, lifted) else "n"

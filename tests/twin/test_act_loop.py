@@ -108,6 +108,8 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
         )  # the base says the recorded task; its perturbations follow
         assert {r["perturbation"] for r in records[1:]} >= {"L", "LB2", "LB3", "SB"}
     assert "ΔLB3" in (out / "report" / "report.md").read_text()
+    ended = (out / "report" / "where_it_ended.md").read_text()  # from each run's log of the operator's view
+    assert "## act" in ended and "## demonstrator" in ended and "| original | 1 |" in ended
 
     # Two checkpoints of one training (2 and 3 steps), interleaved on the same bases, as after a second round of data.
     first = tmp_path / "act" / "checkpoints" / "000002" / "pretrained_model"
