@@ -94,7 +94,8 @@ def record(args: argparse.Namespace, twin, root: Path, first: int, count: int) -
 
 
 def record_parts(args: argparse.Namespace, flags: list[str]) -> int:
-    """Record every unfinished part on a twin of its own, side by side; the worst exit status."""
+    """Record every unfinished part on a twin of its own, side by side; the first failed part's exit status (a
+    signal's is negative), else 0."""
     from lerobot_teleoperator_so101_demo.launch import running_twin
 
     todo = [part for part in shards(args) if recorded(part[0]) < part[2]]
@@ -102,7 +103,7 @@ def record_parts(args: argparse.Namespace, flags: list[str]) -> int:
         twins = [stack.enter_context(running_twin(*flags)) for _ in todo]
         with ThreadPoolExecutor(max_workers=max(len(todo), 1)) as pool:
             statuses = list(pool.map(lambda twin, part: record(args, twin, *part), twins, todo))
-    return max(statuses, default=0)
+    return next((status for status in statuses if status != 0), 0)
 
 
 def join_parts(args: argparse.Namespace) -> None:
