@@ -80,7 +80,8 @@ def main() -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")
     from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
     from lerobot_teleoperator_so101_demo import SO101Demo, SO101DemoConfig
-    from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+    from lerobot_contrast.ports import free_port
+    from lerobot_contrast.twin.launch import start_twin
 
     from lerobot_contrast.domains.task_file import load_task_file
 

@@ -35,7 +35,7 @@ POSES = [
 
 def serve_bus(calibration_dir: str, robot_id: str, ports: multiprocessing.Queue, stop: multiprocessing.Event) -> None:
     """The child: the twin's arm on its bus alone (servos clocked by the wall clock, no physics)."""
-    from lerobot_contrast.twin import arm
+    from lerobot_contrast.so101 import arm
     from lerobot_contrast.twin.bus_server import BusServer
     from lerobot_contrast.twin.calibration_file import write_calibration_file
     from lerobot_contrast.twin.servos import ServoBank
@@ -120,13 +120,9 @@ def eval_figures(work: Path, instances: int) -> dict[str, str]:
     import os
     import re
     import shlex
-    import socket
     import subprocess
 
-    def free_port() -> int:
-        with socket.socket() as probe:
-            probe.bind(("127.0.0.1", 0))
-            return probe.getsockname()[1]
+    from lerobot_contrast.ports import free_port
 
     camera, control = free_port(), free_port()
     python = sys.executable
@@ -138,22 +134,24 @@ def eval_figures(work: Path, instances: int) -> dict[str, str]:
     try:
         flags = next(shlex.split(line[12:]) for line in twin.stdout if line.startswith("eval flags: "))
         policy = save_act(work / "act")
-        placement = f"tcp://127.0.0.1:{control}"
         from lerobot_contrast.domains.task_file import load_task_file
+        from lerobot_contrast.twin.placement_client import PlacementClient
         from lerobot_contrast.twin.scene import start_poses
 
+        placement = PlacementClient(f"tcp://127.0.0.1:{control}")
+
         for name, pose in start_poses(load_task_file("so101_blocks").spec, None).items():  # clear the board's place
-            ask(placement, {"cmd": "place", "object": name, "x": pose.x, "y": pose.y})
-        ask(placement, {"cmd": "board", "x": 0.30, "y": 0.0, "yaw_deg": 0})
+            placement.ask({"cmd": "place", "object": name, "x": pose.x, "y": pose.y})
+        placement.ask({"cmd": "board", "x": 0.30, "y": 0.0, "yaw_deg": 0})
         table = work / "table.calibration.json"
         calibrate = [python, "-m", "lerobot_contrast.calibrate", "--task=so101_blocks", "--board.x=0.30",
                      "--board.y=0", "--board.yaw_deg=0", f"--output={table}", *flags]  # fmt: skip
         subprocess.run(calibrate, check=True)
-        ask(placement, {"cmd": "remove_board"})
+        placement.ask({"cmd": "remove_board"})
         figures, periods = {}, []
         for name, error in (("flagged_4cm", "offset:0.04"), ("flagged_05cm", "offset:0.005")):
             run_dir = work / name
-            command = [python, "-m", "lerobot_contrast.twin.operator", f"--placement={placement}",
+            command = [python, "-m", "lerobot_contrast.twin.operator", f"--placement={placement.address}",
                        f"--placement_error={error}", "--task=so101_blocks", *flags, f"--policy.path={policy}",
                        "--policy.device=cpu", "--strategy=standard", f"--n_instances={instances}", "--fps=30",
                        "--max_episode_s=3", "--cost=measured", f"--staging.calibration={table}",
@@ -206,21 +204,6 @@ def save_act(directory: Path) -> Path:
     config = SO101FollowerConfig(port="unused", id="act", calibration_dir=directory / "calibration",
                                  cameras={"front": camera})  # fmt: skip
     return save_fresh_policy(SO101Follower(config), "act", directory, device="cpu", **recipe)
-
-
-def ask(address: str, request: dict) -> dict:
-    import json
-
-    import zmq
-
-    socket = zmq.Context.instance().socket(zmq.REQ)
-    socket.connect(address)
-    socket.send_string(json.dumps(request))
-    reply = json.loads(socket.recv())
-    socket.close()
-    if not reply.get("ok"):
-        sys.exit(f"bench_twin: the twin refused {request}: {reply.get('error')}")
-    return reply
 
 
 def main() -> None:

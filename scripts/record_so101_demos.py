@@ -96,7 +96,7 @@ def record(args: argparse.Namespace, twin, root: Path, first: int, count: int) -
 def record_parts(args: argparse.Namespace, flags: list[str]) -> int:
     """Record every unfinished part on a twin of its own, side by side; the first failed part's exit status (a
     signal's is negative), else 0."""
-    from lerobot_teleoperator_so101_demo.launch import running_twin
+    from lerobot_contrast.twin.launch import running_twin
 
     todo = [part for part in shards(args) if recorded(part[0]) < part[2]]
     with contextlib.ExitStack() as stack:  # started one after another: each takes free ports of its own
@@ -146,7 +146,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    from lerobot_teleoperator_so101_demo.plan import goal_of
+    from lerobot_contrast.so101.plan import goal_of
 
     from lerobot_contrast.contrast.errors import UserError
     from lerobot_contrast.domains.task_file import load_task_file

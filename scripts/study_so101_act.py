@@ -138,11 +138,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
-    from lerobot_teleoperator_so101_demo.launch import running_twin
+    from lerobot_contrast.twin.launch import running_twin
 
     from lerobot_contrast.contrast.errors import UserError
     from lerobot_contrast.domains.task_file import load_task_file
-    from lerobot_contrast.twin.operator import Placement
+    from lerobot_contrast.twin.placement_client import PlacementClient
     from lerobot_contrast.twin.scene import start_poses
 
     width, height = (args.width, args.height) if args.checkpoint is None else frame_size(args.checkpoint)
@@ -151,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     flags = ["--task=so101_red_left", f"--seed={args.seed}", "--fps=30", f"--width={width}", f"--height={height}"]
     try:
         with running_twin(*flags) as twin:
-            placement, storage = Placement(twin.placement), start_poses(load_task_file("so101_red_left").spec, None)
+            placement, storage = PlacementClient(twin.placement), start_poses(load_task_file("so101_red_left").spec, None)
             for policy, run_dir in zip(args.policies, runs, strict=True):
                 if not started(run_dir):  # the objects wait in their storage row, where a new run's plan starts
                     for name, pose in storage.items():

@@ -7,7 +7,6 @@ import json
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import sysconfig
@@ -23,6 +22,7 @@ import yaml
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.sweep.carry import MARK
 from lerobot_contrast.sweep.shipping import DISTRIBUTIONS
+from lerobot_contrast.ports import free_port
 
 pytestmark = pytest.mark.slow
 
@@ -31,12 +31,6 @@ TINY = {"eval": {"n_instances": 2, **ORACLE}, "grid": {"seed": [0, 1]}}
 # Three cells of 28 trials, one at a time on the node's one CPU: long enough to interrupt the second mid-way.
 THREE = {"eval": {"n_instances": 4, **ORACLE, "max_episode_steps": 40}, "grid": {"seed": [0, 1, 2]}}
 OURS = tuple(name.replace("-", "_") for name in DISTRIBUTIONS)
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def namespace_command() -> list[str] | None:

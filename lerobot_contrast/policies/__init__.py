@@ -99,7 +99,7 @@ for _entry in (
     ),
     PolicyEntry(
         "so101_demonstrator",
-        "lerobot_teleoperator_so101_demo.policy:build",
+        "lerobot_contrast.twin.demonstrator:build",
         "the scripted demonstrator on the virtual SO-101: reads each goal and the twin's true scene ([twin] extra)",
     ),
 ):

@@ -9,7 +9,6 @@ presses Enter, and labels each trial from the twin's true scene with the task's 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import subprocess
@@ -19,14 +18,11 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import zmq
-
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.twin.fates import ENDED, TRIAL
+from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient
 
-DEFAULT_PLACEMENT = "tcp://127.0.0.1:5556"
-REPLY_TIMEOUT_MS = 5000
 # After placing, wait as a person's hands leave the table: the camera's latest frame is up to a few frames old, and
 # the staging check reads it at Enter (measured on the twin: the frame read at once still showed the old pose).
 SETTLE_S = 0.5
@@ -71,47 +67,6 @@ class PlacementError:
         return 0.0, 0.0
 
 
-class Placement:
-    """A client of the twin's placement socket (twin/placement.py)."""
-
-    def __init__(self, address: str):
-        self.address = address
-        self._context = zmq.Context.instance()
-        self._socket = self._connect()
-
-    def _connect(self) -> zmq.Socket:
-        socket = self._context.socket(zmq.REQ)
-        socket.setsockopt(zmq.LINGER, 0)
-        socket.setsockopt(zmq.RCVTIMEO, REPLY_TIMEOUT_MS)
-        socket.connect(self.address)
-        return socket
-
-    def ask(self, request: dict) -> dict:
-        self._socket.send_string(json.dumps(request))
-        try:
-            reply = json.loads(self._socket.recv())
-        except zmq.Again:
-            self._socket.close()
-            self._socket = self._connect()  # a REQ socket that missed its reply cannot send again
-            raise OperatorError(
-                f"the twin's placement socket {self.address} did not answer; is the twin running?"
-            ) from None
-        if not reply.get("ok"):
-            raise OperatorError(f"the twin refused {request}: {reply.get('error')}")
-        return reply
-
-    def place(self, name: str, x: float, y: float) -> None:
-        self.ask({"cmd": "place", "object": name, "x": float(x), "y": float(y)})
-
-    def scene(self) -> Scene:
-        return self.look()[0]
-
-    def look(self) -> tuple[Scene, dict[str, float]]:
-        """The true scene, and each object's height (m): what tells an object resting from one held in the gripper."""
-        reply = self.ask({"cmd": "scene"})
-        return Scene({name: Pose(*pose) for name, pose in reply["objects"].items()}), reply["z"]
-
-
 def _pose(text: str) -> tuple[float, float] | None:
     numbers = re.findall(r"[+-]\d+\.\d+", text)
     return (float(numbers[0]), float(numbers[1])) if numbers else None
@@ -152,7 +107,7 @@ class Plan:
 class Operator:
     """Answers one eval's console: `answer` writes a line to its input, as a person pressing keys does."""
 
-    def __init__(self, plan: Plan, placement: Placement, error: PlacementError, seed: int, on_flagged: str):
+    def __init__(self, plan: Plan, placement: PlacementClient, error: PlacementError, seed: int, on_flagged: str):
         self.plan, self.placement, self.error, self.on_flagged = plan, placement, error, on_flagged
         self.rng = np.random.default_rng(seed)
         self.index, self.instruction = 0, ""
@@ -252,7 +207,7 @@ def run_eval(eval_argv: Sequence[str], operator: Operator) -> int:
                     print(f"[operator] {typed or 'Enter'}", flush=True)
                     child.stdin.write(typed + "\n")
                     child.stdin.flush()
-        except OperatorError:
+        except (OperatorError, UserError):
             child.stdin.write("q\n")  # stop the session where it is: the run stays resumable
             child.stdin.close()
             child.wait()
@@ -264,7 +219,7 @@ def run_eval(eval_argv: Sequence[str], operator: Operator) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m lerobot_contrast.twin.operator", description=__doc__)
-    parser.add_argument("--placement", default=DEFAULT_PLACEMENT, help="the twin's placement socket")
+    parser.add_argument("--placement", default=DEFAULT_ADDRESS, help="the twin's placement socket")
     parser.add_argument("--placement_error", default="none", help="none, normal:SIGMA or offset:D (metres)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the placement errors")
     parser.add_argument("--on_flagged", choices=("accept", "fix"), default="accept",
@@ -272,7 +227,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     known, eval_argv = parser.parse_known_args(argv)
     try:
         error = PlacementError.parse(known.placement_error)
-        operator = Operator(Plan(eval_argv), Placement(known.placement), error, known.seed, known.on_flagged)
+        operator = Operator(Plan(eval_argv), PlacementClient(known.placement), error, known.seed, known.on_flagged)
         return run_eval(eval_argv, operator)
     except (OperatorError, UserError) as failure:
         print(f"error: {failure}", file=sys.stderr)

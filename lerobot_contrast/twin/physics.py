@@ -12,7 +12,7 @@ from typing import TypeVar
 
 import mujoco
 
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.servos import ServoBank
 
 CONTROL_DT = 0.01  # s per tick: the bank and the actuators' targets update at 100 Hz

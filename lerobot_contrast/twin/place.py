@@ -9,7 +9,7 @@ import sys
 from collections.abc import Sequence
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.twin.placement import DEFAULT_PORT, request
+from lerobot_contrast.twin.placement_client import DEFAULT_PORT, request
 
 USAGE = "usage: python -m lerobot_contrast.twin.place OBJECT X Y [YAW] [--control_port=5556]  (or: place scene)"
 

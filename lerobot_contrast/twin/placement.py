@@ -23,10 +23,9 @@ import zmq
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file.schema import TaskSpec
 from lerobot_contrast.twin.physics import Physics
+from lerobot_contrast.twin.placement_client import DEFAULT_PORT, HOST
 from lerobot_contrast.twin.scene import object_sizes, start_poses, table_extent
 
-HOST = "127.0.0.1"
-DEFAULT_PORT = 5556
 COMMANDS = ("place", "scene", "board", "remove_board", "reset_arm")
 POLL_MS = 100  # how often the serving thread looks up to see whether it should stop
 
@@ -164,22 +163,3 @@ def _number(request: dict[str, Any], key: str) -> float:
 
 def _error(message: str) -> dict[str, Any]:
     return {"ok": False, "error": message}
-
-
-def request(command: dict[str, Any], port: int = DEFAULT_PORT, timeout_s: float = 5.0) -> dict[str, Any]:
-    """Send one command to a running twin and return its reply; no twin answering is one line saying so."""
-    context = zmq.Context()
-    socket = context.socket(zmq.REQ)
-    socket.setsockopt(zmq.LINGER, 0)
-    try:
-        socket.connect(f"tcp://{HOST}:{port}")
-        socket.send_string(json.dumps(command))
-        if not socket.poll(round(timeout_s * 1000)):
-            raise UserError(
-                f"no twin answers on tcp://{HOST}:{port} within {timeout_s:g} s; start it with "
-                "`python -m lerobot_contrast.twin` or give the --control_port it printed"
-            )
-        return json.loads(socket.recv())
-    finally:
-        socket.close()
-        context.term()

@@ -61,7 +61,7 @@ class Twin:
     """The running bench of `config`; `camera=False` leaves the webcam out (tests of the arm alone)."""
 
     def __init__(self, config: TwinConfig, camera: bool = True) -> None:
-        from lerobot_contrast.twin import arm  # MuJoCo loads here, after the caller chose its GL backend
+        from lerobot_contrast.so101 import arm  # MuJoCo loads here, after the caller chose its GL backend
         from lerobot_contrast.twin.camera import view_hulls
         from lerobot_contrast.twin.physics import Physics
         from lerobot_contrast.twin.scene import build_spec

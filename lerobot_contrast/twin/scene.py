@@ -12,7 +12,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.task_file.schema import ObjectSpec, Region, TaskSpec
 from lerobot_contrast.domains.task_file.world import storage_scene
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 
 TABLE_MARGIN = 0.15  # m of table around the workspace, the base and the storage row
 TABLE_THICKNESS = 0.04

@@ -14,6 +14,7 @@ import pytest
 
 from lerobot_contrast import review
 from lerobot_contrast.contrast.trial import TrialRecord
+from lerobot_contrast.ports import free_port
 from tests.record.conftest import STEPS, read_rrd, rerun_cli, static_row
 
 
@@ -110,12 +111,6 @@ def test_with_a_display_it_opens_the_merged_file_in_the_native_viewer(recorded_r
 
 class _Done:
     returncode = 0
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])

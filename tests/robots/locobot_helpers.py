@@ -3,7 +3,6 @@ proxy that loses, repeats and reorders messages between client and host."""
 
 from __future__ import annotations
 
-import socket
 import threading
 from dataclasses import replace
 from pathlib import Path
@@ -13,6 +12,7 @@ import numpy as np
 import zmq
 from lerobot_robot_locobot import LocobotConfig
 from lerobot_robot_locobot.config_host import HostConfig
+from lerobot_contrast.ports import free_port
 
 FREE_PORTS = HostConfig(port_command=0, port_observation=0, port_rpc=0)
 
@@ -28,12 +28,6 @@ def client_config(ports: dict[str, int], calibration_dir: Path, **changes: Any) 
         connect_timeout_s=2.0,
     )
     return replace(config, **changes)
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class CountingBackend:

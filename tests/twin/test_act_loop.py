@@ -7,11 +7,12 @@ import subprocess
 import sys
 
 import pytest
-from lerobot_teleoperator_so101_demo import plan
-from lerobot_teleoperator_so101_demo.launch import free_port, start_twin
+from lerobot_contrast.so101 import plan
+from lerobot_contrast.ports import free_port
+from lerobot_contrast.twin.launch import start_twin
 
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 from tests.study_scripts import SCRIPTS, load_script
 
 INSTRUCTION = "put the red cube in the left bin"
@@ -60,7 +61,7 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
                       "--width=96", "--height=72", "--seed=5")  # fmt: skip
     try:
         assert record.record(args, twin, demos, 0, 2) == 0
-        from lerobot_contrast.twin.placement import request
+        from lerobot_contrast.twin.placement_client import request
 
         scene = request({"cmd": "scene"}, int(twin.placement.rsplit(":", 1)[1]))["objects"]
     finally:

@@ -12,7 +12,7 @@ from lerobot.motors import MotorCalibration
 from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
 
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank

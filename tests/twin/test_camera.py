@@ -3,7 +3,6 @@ printed board lying on the twin's table is found by the project's calibration un
 camera model puts it; a busy port or a broken renderer is one line."""
 
 import json
-import socket
 import threading
 
 import cv2
@@ -16,6 +15,7 @@ from lerobot_contrast.twin.board import NAME, add_board, remove_board
 from lerobot_contrast.twin.camera import CameraArgs, TwinCamera
 from lerobot_contrast.twin.camera_server import CameraServer, robot_cameras, serve_camera
 from lerobot_contrast.twin.lens import LensArgs
+from lerobot_contrast.ports import free_port
 
 TARGET = (0.30, 0.0, 0.0)  # so101_blocks' workspace centre
 BOARD = {"x": 0.32, "y": -0.02, "yaw_deg": 12.0}
@@ -43,12 +43,6 @@ def world():
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     return model, data
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def test_lerobot_zmq_camera_reads_rgb_frames_from_the_twin(world):

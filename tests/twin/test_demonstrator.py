@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from lerobot_teleoperator_so101_demo import SO101Demo, SO101DemoConfig, plan
 from lerobot_teleoperator_so101_demo import so101_demo as demo_module
-from lerobot_teleoperator_so101_demo.launch import free_port
+from lerobot_contrast.ports import free_port
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement import PlacementServer
 from lerobot_contrast.twin.scene import build_spec

@@ -16,15 +16,10 @@ import pytest
 
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan
+from lerobot_contrast.ports import free_port
 
 FRAME = ("--width=160", "--height=120")  # a small camera keeps the test quick; the bench times 640x480
 RUN = ("--task=so101_blocks", "--strategy=contrast", "--n_instances=1", "--perturbations=L,S1", "--fps=30")
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 class Twin:

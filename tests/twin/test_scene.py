@@ -10,7 +10,7 @@ import pytest
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.task_file import load_task_file, task_from_dict
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.scene import COLOURS, build_spec, table_extent
 from lerobot_contrast.twin.servos import ServoBank

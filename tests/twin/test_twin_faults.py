@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.bus_server import BusServer
 from lerobot_contrast.twin.calibration_file import write_calibration_file
 from lerobot_contrast.twin.faults import FaultsConfig

@@ -14,11 +14,13 @@ import pytest
 import zmq
 
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.physics import Physics
-from lerobot_contrast.twin.placement import PlacementServer, request
+from lerobot_contrast.twin.placement import PlacementServer
+from lerobot_contrast.twin.placement_client import request
 from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
+from lerobot_contrast.ports import free_port
 from tests.twin.test_bus import connected
 
 POSE = {"shoulder_pan.pos": 20.0, "shoulder_lift.pos": -30.0, "elbow_flex.pos": 40.0, "wrist_flex.pos": 60.0,
@@ -117,12 +119,6 @@ def test_reset_arm_puts_it_at_rest(placement):
     physics.run(0.5)
     for name in arm.MOTOR_NAMES:
         assert arm.to_angle(name, physics.bank.present(name)) == pytest.approx(arm.REST[name], abs=math.radians(1))
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def twin_command(*flags: str) -> list[str]:

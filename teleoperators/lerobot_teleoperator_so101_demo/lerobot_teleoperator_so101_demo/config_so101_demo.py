@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 from lerobot.teleoperators.config import TeleoperatorConfig
 
-DEFAULT_PLACEMENT = "tcp://127.0.0.1:5556"
-DEFAULT_PACE = 1.5
+from lerobot_contrast.so101 import DEFAULT_PACE
+from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS
 
 
 @TeleoperatorConfig.register_subclass("so101_demo")
@@ -17,7 +17,7 @@ class SO101DemoConfig(TeleoperatorConfig):
     the instruction, and moves the arm through inverse kinematics; places the objects anew for every episode."""
 
     # The twin's placement socket, as `python -m lerobot_contrast.twin` prints it.
-    placement: str = DEFAULT_PLACEMENT
+    placement: str = DEFAULT_ADDRESS
     # The task file the twin was started with (a path or a shipped example's name).
     task: str = "so101_blocks"
     # What to do; default: the recorded task, --dataset.single_task.

@@ -12,9 +12,9 @@ from lerobot.teleoperators.teleoperator import Teleoperator
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.twin import arm
-from lerobot_contrast.twin.operator import OperatorError, Placement
-from lerobot_teleoperator_so101_demo import plan
+from lerobot_contrast.so101 import arm
+from lerobot_contrast.twin.placement_client import PlacementClient, TwinError
+from lerobot_contrast.so101 import plan
 from lerobot_teleoperator_so101_demo.config_so101_demo import SO101DemoConfig
 
 DEFAULT_EPISODE_S = 60.0  # lerobot-record's own default for --dataset.episode_time_s
@@ -47,7 +47,7 @@ class SO101Demo(Teleoperator):
         self.instruction = config.instruction or record_flag("single_task")
         self.episode_time_s = config.episode_time_s or float(record_flag("episode_time_s") or DEFAULT_EPISODE_S)
         self.episode = config.first_episode  # the placement to make next
-        self._placement: Placement | None = None
+        self._placement: PlacementClient | None = None
         self._placed = False  # the objects are placed for the coming episode
         self._start = self._last = None
         self._schedule: list[tuple[float, dict[str, float]]] = []
@@ -80,7 +80,7 @@ class SO101Demo(Teleoperator):
         self.task = load_task_file(self.config.task)
         self.predicate = plan.goal_of(self.task, self.instruction)
         self.model = plan.arm_model(self.task.spec)
-        self._placement = Placement(self.config.placement)
+        self._placement = PlacementClient(self.config.placement)
         try:
             self.place_anew()
         except UserError:
@@ -97,7 +97,7 @@ class SO101Demo(Teleoperator):
         """The twin's reply to a placement request; a twin that does not answer or refuses is one line."""
         try:
             return self._placement.ask(request)
-        except OperatorError as error:
+        except TwinError as error:
             raise UserError(f"so101_demo: {error}") from None
 
     def place_anew(self) -> None:
@@ -111,7 +111,8 @@ class SO101Demo(Teleoperator):
         """Plan this episode's motion from the true scene (the arm at rest)."""
         if not self._placed:  # no reset period (--dataset.reset_time_s=0): place now
             self.place_anew()
-        poses = plan.true_poses(self.ask({"cmd": "scene"}))
+        reply = self.ask({"cmd": "scene"})
+        poses = {name: (x, y, reply["z"][name], yaw) for name, (x, y, yaw) in reply["objects"].items()}
         self._schedule = plan.schedule(self.model, self.predicate, poses, self.task.spec, self.config.pace)
         self._start, self._placed = now, False
         if self.schedule_s > self.episode_time_s:

@@ -1,5 +1,6 @@
 """What the demonstrator does for an instruction: its goal (matched against the task file's own templates), where
-the object goes, the joint goals that take it there (the twin's inverse kinematics), and each episode's placement."""
+the object goes, the joint goals that take it there (inverse kinematics on the arm's model), and each episode's placement.
+The demonstrator plans with it, and so does the arm when it stages a trial itself."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import FileTask, TaskSpec
 from lerobot_contrast.domains.task_file.goals import compose
 from lerobot_contrast.domains.task_file.world import sample_scene
-from lerobot_contrast.twin import arm, reach
+from lerobot_contrast.so101 import arm, reach
 from lerobot_contrast.twin.scene import build_spec, is_bin, object_sizes
 
 NEAR_GAP = 0.012  # m between the faces of an object put next to another: room for where it lands, within the goal
@@ -105,11 +106,6 @@ def placement(spec: TaskSpec, seed: int, episode: int) -> dict[str, tuple[float,
     return {
         name: (scene.objects[name].x, scene.objects[name].y, rng.uniform(-math.pi / 4, math.pi / 4)) for name in movable
     }
-
-
-def true_poses(reply: Mapping) -> dict[str, tuple[float, float, float, float]]:
-    """The objects' poses (x, y, z, yaw) from the twin's answer to a `scene` request."""
-    return {name: (x, y, reply["z"][name], yaw) for name, (x, y, yaw) in reply["objects"].items()}
 
 
 def schedule(model: mujoco.MjModel, predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec, pace: float):

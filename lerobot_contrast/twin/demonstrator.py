@@ -1,7 +1,7 @@
 """The scripted demonstrator as an evaluator policy (`--policy.type=so101_demonstrator`): on the virtual SO-101 it
-reads each trial's goal, which is what the instruction's words mean, and the twin's true scene, and runs the same
-plan it demonstrates with. It is the contrast set's reference, a policy that reads every word: against it, a learned
-policy's losses on the perturbations are the policy's own."""
+reads the trial's goal predicate (what the instruction's words mean, not the words) and the twin's true poses, and
+runs the same plan it demonstrates with. It is the contrast set's reference by construction, not a policy that
+understands language: against it, a learned policy's losses on the perturbations are the policy's own."""
 
 from __future__ import annotations
 
@@ -12,9 +12,8 @@ from typing import Any
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.domains.task_file import FileTask
 from lerobot_contrast.policies.base import PolicyArgs, PolicyError
-from lerobot_contrast.twin.operator import OperatorError, Placement
-from lerobot_teleoperator_so101_demo import plan
-from lerobot_teleoperator_so101_demo.config_so101_demo import DEFAULT_PACE, DEFAULT_PLACEMENT
+from lerobot_contrast.so101 import DEFAULT_PACE, plan
+from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient, TwinError
 
 
 class SO101Demonstrator:
@@ -23,7 +22,7 @@ class SO101Demonstrator:
     def __init__(self, task: FileTask, placement: str, pace: float) -> None:
         self.task, self.pace = task, pace
         self.model = plan.arm_model(task.spec)
-        self.placement = Placement(placement)
+        self.placement = PlacementClient(placement)
         self._true_poses()  # a twin that does not answer is one line before the run starts
         self._schedule: list[tuple[float, dict[str, float]]] = []
         self._start: float | None = None
@@ -35,8 +34,8 @@ class SO101Demonstrator:
 
     def _true_poses(self) -> dict[str, tuple[float, float, float, float]]:
         try:
-            return plan.true_poses(self.placement.ask({"cmd": "scene"}))
-        except OperatorError as error:
+            return self.placement.poses()
+        except TwinError as error:
             raise PolicyError(
                 f"--policy.type=so101_demonstrator: {error}; start the twin, or give its socket with --policy.placement"
             ) from None
@@ -54,4 +53,4 @@ def build(args: PolicyArgs, robot: Any, task: Any, rename_map: Mapping[str, str]
             "--policy.type=so101_demonstrator drives an SO-101 (--robot.type=so101_follower, the virtual SO-101) "
             "on a task file's world (--task=so101_blocks, so101_red_left or yours)"
         )
-    return SO101Demonstrator(task, args.placement or DEFAULT_PLACEMENT, DEFAULT_PACE)
+    return SO101Demonstrator(task, args.placement or DEFAULT_ADDRESS, DEFAULT_PACE)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from lerobot_contrast.twin import arm
+from lerobot_contrast.so101 import arm
 
 ARM_JOINTS = arm.MOTOR_NAMES[:5]
 SITE = "gripperframe"  # on the fixed jaw's tip; its x axis points out of the fingertips, its z axis across the jaws

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import contextlib
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -14,14 +13,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.ports import free_port
 
 ENDPOINTS = ("bus", "camera", "placement", "calibration", "eval flags")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @dataclass

@@ -1,0 +1,82 @@
+"""The one client of the twin's placement socket (twin/placement.py): what the scripted person, the demonstrator,
+`python -m lerobot_contrast.twin.place`, the studies and the tests send to the running twin. It reads the twin's
+truth, so nothing that stages or labels from the camera uses it."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import zmq
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.scene import Pose, Scene
+
+HOST = "127.0.0.1"
+DEFAULT_PORT = 5556
+DEFAULT_ADDRESS = f"tcp://{HOST}:{DEFAULT_PORT}"
+
+
+class TwinError(UserError):
+    """The twin did not answer, or refused a request; one line."""
+
+
+class PlacementClient:
+    """Requests to the twin at `address`, each answered within `timeout_s` or a TwinError saying no twin answers."""
+
+    def __init__(self, address: str = DEFAULT_ADDRESS, timeout_s: float = 5.0) -> None:
+        self.address, self.timeout_s = address, timeout_s
+        self._context = zmq.Context.instance()
+        self._socket = self._connect()
+
+    def _connect(self) -> zmq.Socket:
+        socket = self._context.socket(zmq.REQ)
+        socket.setsockopt(zmq.LINGER, 0)
+        socket.connect(self.address)
+        return socket
+
+    def ask(self, request: dict[str, Any], check: bool = True) -> dict[str, Any]:
+        """The twin's reply; with `check`, a refusal is a TwinError naming the request."""
+        self._socket.send_string(json.dumps(request))
+        if not self._socket.poll(round(self.timeout_s * 1000)):
+            self._socket.close()
+            self._socket = self._connect()  # a REQ socket that missed its reply cannot send again
+            raise TwinError(
+                f"no twin answers on {self.address} within {self.timeout_s:g} s; start it with "
+                "`python -m lerobot_contrast.twin` or give the placement address it printed"
+            )
+        reply = json.loads(self._socket.recv())
+        if check and not reply.get("ok"):
+            raise TwinError(f"the twin refused {request}: {reply.get('error')}")
+        return reply
+
+    def place(self, name: str, x: float, y: float, yaw: float | None = None) -> dict[str, Any]:
+        request = {"cmd": "place", "object": name, "x": float(x), "y": float(y)}
+        if yaw is not None:
+            request["yaw"] = float(yaw)
+        return self.ask(request)
+
+    def scene(self) -> Scene:
+        return self.look()[0]
+
+    def look(self) -> tuple[Scene, dict[str, float]]:
+        """The true scene, and each object's height (m): what tells an object resting from one held in the gripper."""
+        reply = self.ask({"cmd": "scene"})
+        return Scene({name: Pose(*pose) for name, pose in reply["objects"].items()}), reply["z"]
+
+    def poses(self) -> dict[str, tuple[float, float, float, float]]:
+        """Each object's (x, y, z, yaw), as the demonstrator plans from them."""
+        reply = self.ask({"cmd": "scene"})
+        return {name: (x, y, reply["z"][name], yaw) for name, (x, y, yaw) in reply["objects"].items()}
+
+    def close(self) -> None:
+        self._socket.close()
+
+
+def request(command: dict[str, Any], port: int = DEFAULT_PORT, timeout_s: float = 5.0) -> dict[str, Any]:
+    """One command to the twin on `port` of 127.0.0.1, and its reply as sent (a refusal included)."""
+    client = PlacementClient(f"tcp://{HOST}:{port}", timeout_s)
+    try:
+        return client.ask(command, check=False)
+    finally:
+        client.close()
