@@ -11,7 +11,7 @@ from typing import Any
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.lane_seats import batches_lanes
 
-# Lanes `--lanes=auto` runs on our simulators: scripts/bench_lanes.py measures their speed and memory.
+# Lanes `--lanes=auto` runs on our simulators: scripts/bench/bench_lanes.py measures their speed and memory.
 AUTO_LANES = 8
 EVAL_THREADS = 1
 

@@ -129,7 +129,7 @@ except SystemExit as exit:
 
 
 def test_a_mistyped_flag_is_answered_before_lerobot_torch_or_ray_load():
-    """The check that makes a typo's answer instant (the seconds are measured by scripts/bench_flag_errors.py)."""
+    """The check that makes a typo's answer instant (the seconds are measured by scripts/bench/bench_flag_errors.py)."""
     import subprocess
     import sys
 

@@ -1,4 +1,4 @@
-"""The paper's study (the shipped sweep file paper_sim, analysed by scripts/reproduce_paper_sim.py) stays runnable:
+"""The paper's study (the shipped sweep file paper_sim, analysed by scripts/study/reproduce_paper_sim.py) stays runnable:
 its sweep file expands into valid simulated cells of the learned default, and every design the analysis reads is in it."""
 
 from lerobot_contrast.sweep.cells import read_sweep_file, studies_dir, sweep_cells

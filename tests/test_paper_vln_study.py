@@ -1,4 +1,4 @@
-"""The paper's navigation study (the shipped sweep file paper_vln, run and analysed by scripts/reproduce_paper_vln.py): its
+"""The paper's navigation study (the shipped sweep file paper_vln, run and analysed by scripts/study/reproduce_paper_vln.py): its
 sweep file expands into the designs the analysis reads, its verdicts follow the numbers, and a tiny run writes the
 whole report."""
 

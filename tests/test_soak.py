@@ -1,4 +1,4 @@
-"""A shorter soak (scripts/soak.py): a recorded session's threads and open files do not grow with its episodes."""
+"""A shorter soak (scripts/bench/soak.py): a recorded session's threads and open files do not grow with its episodes."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "soak.py"
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "bench" / "soak.py"
 
 
 @pytest.mark.slow

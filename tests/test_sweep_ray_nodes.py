@@ -19,10 +19,10 @@ import psutil
 import pytest
 import yaml
 
+from lerobot_contrast.ports import free_port
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.sweep.carry import MARK
 from lerobot_contrast.sweep.shipping import DISTRIBUTIONS
-from lerobot_contrast.ports import free_port
 
 pytestmark = pytest.mark.slow
 
@@ -182,3 +182,14 @@ def test_a_wrong_address_or_token_is_one_line_in_seconds(cluster):
         assert code == 2 and output.startswith(f"error: --ray.address={address}: ") and expected in output, output
         assert output.count("\n") == 1 and seconds < 10, (output, seconds)
         assert "~/.ray/auth_token" in output or "token" not in expected
+
+
+def test_a_plain_sweep_runs_on_a_ray_of_its_own_beside_a_head_on_this_machine(cluster):
+    """No --ray.address is this machine only: the head `ray start --head` left running here (its address in
+    RAY_TMPDIR's ray_current_cluster, which a plain ray.init() joins) is neither joined nor disturbed."""
+    assert (cluster["root"] / "rt" / "ray" / "ray_current_cluster").exists()
+    code, output, _ = run(cluster, TINY, "plain")
+    assert code == 0, output
+    assert_whole(cluster["root"] / "driver" / "plain", planned=14)
+    sweep_id = (cluster["root"] / "driver" / "plain" / MARK).read_text()
+    assert not (cluster["root"] / "wtmp" / "lerobot_contrast_sweeps" / sweep_id).exists()  # none ran on its node

@@ -25,7 +25,7 @@ GRID_POINTS = 1001
 # 1/2 or 3/4 for an interval.
 TRUNCATION = 0.75
 # A paired comparison tests one point, 0 difference, and policies worth telling apart differ by a lot per base: the
-# bets that decide soonest there are at the bound (scripts/savings_sequential.py prints the best constant bet), so
+# bets that decide soonest there are at the bound (scripts/study/savings_sequential.py prints the best constant bet), so
 # its sequence lets them go nearer it. On 50-base runs, 0.9 against 0.75 decides in 12.8 rather than 14.8 bases
 # (learned default vs oracle) and 31.8 rather than 35.0 (vs its copy with 2 cm of action noise).
 DIFFERENCE_TRUNCATION = 0.9

@@ -40,6 +40,7 @@ class PolicyEntry:
     reads_images: bool = False  # whether the robot must render its cameras for it
     path: str | None = None  # the LeRobot checkpoint a pretrained entry loads (a directory or a Hub repo id)
     own_noise: bool = False  # whether its builder applies --policy.noise_std itself
+    options: tuple[str, ...] = ()  # the --policy.options it takes
 
     def builder(self) -> Builder:
         module, _, function = self.build.partition(":")
@@ -101,6 +102,7 @@ for _entry in (
         "so101_demonstrator",
         "lerobot_contrast.twin.demonstrator:build",
         "the scripted demonstrator on the virtual SO-101: reads each goal and the twin's true scene ([twin] extra)",
+        options=("placement",),
     ),
 ):
     register(_entry)
@@ -130,6 +132,10 @@ def make_policy(args: PolicyArgs, robot: Robot, task: Task, rename_map: Mapping[
             f"--rename_map: --policy.type={entry.name} reads the robot's own keys; --rename_map is for a LeRobot "
             "policy (--policy.path or a LeRobot --policy.type)"
         )
+    unknown = sorted(set(args.options) - set(entry.options))
+    if unknown:
+        takes = f"it takes {', '.join(entry.options)}" if entry.options else "it takes none"
+        raise PolicyError(f"--policy.options: {entry.name} has no option {', '.join(unknown)}; {takes}")
     noisy = args.noise_std > 0 and not entry.own_noise
     if noisy and entry.build != PRETRAINED_BUILD:
         raise PolicyError(

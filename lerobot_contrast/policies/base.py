@@ -54,9 +54,9 @@ class PolicyArgs:
     # Gaussian noise added to each action of the oracle or a LeRobot policy (the learned default included), in
     # the action's units: metres on the simulated tabletop (0 = none). It makes a noisier copy of a policy.
     noise_std: float = 0.0
-    # The virtual SO-101's placement socket, for --policy.type=so101_demonstrator, which reads the twin's true
-    # scene (as `python -m lerobot_contrast.twin` prints it); unset: tcp://127.0.0.1:5556, the twin's own.
-    placement: str | None = None
+    # Settings of a registered policy of its own, by name, e.g. --policy.options='{placement: tcp://127.0.0.1:5557}'
+    # for so101_demonstrator (the twin's placement socket, as `python -m lerobot_contrast.twin` prints it).
+    options: dict[str, str] = field(default_factory=dict)
     # Probability per episode that the oracle ignores a perturbed instruction's words and executes
     # its base instruction instead (0 = reads every instruction).
     language_blind: float = 0.0

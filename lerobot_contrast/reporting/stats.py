@@ -110,7 +110,7 @@ def estimate(values: np.ndarray, clusters: np.ndarray) -> Estimate:
     """The mean over trials with a 95% interval that respects clustering by base instance (`korn_graubard`).
 
     Unlike the cluster bootstrap it replaced, it keeps its coverage near rates of 0 and 1 with tens of uneven
-    bases (scripts/validate_sequential.py measures both).
+    bases (scripts/study/validate_sequential.py measures both).
     """
     values, clusters = np.asarray(values, dtype=np.float64), np.asarray(clusters)
     if len(values) == 0:

@@ -46,8 +46,7 @@ def join(args: RayArgs) -> None:
     quiet_notes()
     quiet = {"log_to_driver": False, "logging_level": logging.WARNING}
     if args.address is None:
-        local = {"num_cpus": args.num_cpus or os.cpu_count(), "num_gpus": args.num_gpus, "include_dashboard": False}
-        ray.init(**quiet, **local)
+        start_local(args, quiet)
         return
     address = reach(args.address)
     try:
@@ -59,6 +58,16 @@ def join(args: RayArgs) -> None:
         ) from None
     except ConnectionError as error:
         raise ClusterError(f"--ray.address={args.address}: cannot join ({' '.join(str(error).split())})") from None
+
+
+def start_local(args: RayArgs, quiet: dict) -> None:
+    """A Ray of this sweep's own on this machine: "local" starts one even where a head runs here or a killed one left
+    its address behind (a plain `ray.init()` would join either, and then refuses the CPU and GPU counts)."""
+    local = {"num_cpus": args.num_cpus or os.cpu_count(), "num_gpus": args.num_gpus, "include_dashboard": False}
+    try:
+        ray.init(address="local", **quiet, **local)
+    except (ConnectionError, RuntimeError, ValueError) as error:
+        raise ClusterError(f"cannot start Ray on this machine ({' '.join(str(error).split())[:300]})") from None
 
 
 def init_with_retries(**init) -> None:

@@ -37,7 +37,7 @@ class SO101Demonstrator:
             return self.placement.poses()
         except TwinError as error:
             raise PolicyError(
-                f"--policy.type=so101_demonstrator: {error}; start the twin, or give its socket with --policy.placement"
+                f"--policy.type=so101_demonstrator: {error}; start the twin, or give its socket with --policy.options='{{placement: ADDRESS}}'"
             ) from None
 
     def act(self, observation: Mapping[str, Any]) -> dict[str, float]:
@@ -53,4 +53,4 @@ def build(args: PolicyArgs, robot: Any, task: Any, rename_map: Mapping[str, str]
             "--policy.type=so101_demonstrator drives an SO-101 (--robot.type=so101_follower, the virtual SO-101) "
             "on a task file's world (--task=so101_blocks, so101_red_left or yours)"
         )
-    return SO101Demonstrator(task, args.placement or DEFAULT_ADDRESS, DEFAULT_PACE)
+    return SO101Demonstrator(task, args.options.get("placement", DEFAULT_ADDRESS), DEFAULT_PACE)

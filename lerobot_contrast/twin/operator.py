@@ -18,8 +18,9 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.twin.fates import ENDED, TRIAL
 from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient
 

@@ -100,3 +100,21 @@ def test_a_policy_whose_distribution_is_not_installed_is_named_in_one_line(monke
     with pytest.raises(PolicyError, match=r"^--policy.type=elsewhere needs the lerobot_policy_not_installed "
                                           r"distribution, which is not installed: pip install "):  # fmt: skip
         make_policy(PolicyArgs(type="elsewhere"), robot, load_task("language_table"))
+
+
+def test_an_option_a_policy_does_not_take_is_refused_in_one_line():
+    robot = LanguageTableSim(LanguageTableSimConfig())
+    task = load_task("language_table")
+    with pytest.raises(PolicyError, match=r"^--policy.options: oracle has no option placement; it takes none$"):
+        make_policy(PolicyArgs(type="oracle", options={"placement": "tcp://127.0.0.1:5556"}), robot, task)
+    assert POLICIES["so101_demonstrator"].options == ("placement",)
+
+
+def test_policy_options_parse_from_the_command_line():
+    from lerobot_contrast.config import EvalConfig
+    from lerobot_contrast.flags import parse_config
+
+    config = parse_config(
+        EvalConfig, ["--policy.type=so101_demonstrator", "--policy.options={placement: tcp://127.0.0.1:5557}"]
+    )
+    assert config.policy.options == {"placement": "tcp://127.0.0.1:5557"}

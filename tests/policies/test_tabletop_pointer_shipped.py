@@ -1,7 +1,7 @@
 """The shipped `tabletop_pointer` weights: they load through LeRobot's own factory and still push blocks.
 
 A regression check on a small fixed set, not the benchmark: the README's figures come from
-`scripts/train_default_policy.py` on 250 fresh instances.
+`scripts/train/train_default_policy.py` on 250 fresh instances.
 """
 
 import numpy as np

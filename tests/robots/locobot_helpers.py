@@ -12,7 +12,6 @@ import numpy as np
 import zmq
 from lerobot_robot_locobot import LocobotConfig
 from lerobot_robot_locobot.config_host import HostConfig
-from lerobot_contrast.ports import free_port
 
 FREE_PORTS = HostConfig(port_command=0, port_observation=0, port_rpc=0)
 

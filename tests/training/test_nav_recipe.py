@@ -16,7 +16,7 @@ from lerobot_contrast.domains.vln.task import SUCCESS_RADIUS_M
 from lerobot_contrast.training.nav_episodes import SlippingTeacher
 from lerobot_contrast.training.nav_recipe import REPO_ID, NavRecipe, _aggregate, _record, run
 
-SCRIPT = Path(__file__).parents[2] / "scripts" / "train_nav_policy.py"
+SCRIPT = Path(__file__).parents[2] / "scripts" / "train" / "train_nav_policy.py"
 
 
 def episodes(root: Path) -> int:

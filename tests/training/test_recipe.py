@@ -103,7 +103,7 @@ def test_smoke_recipe_trains_with_lerobot_and_resumes_without_redoing_work(tmp_p
 
 
 def test_a_steps_list_that_does_not_match_the_rounds_is_refused_in_one_line():
-    script = Path(__file__).parents[2] / "scripts" / "train_default_policy.py"
+    script = Path(__file__).parents[2] / "scripts" / "train" / "train_default_policy.py"
     result = subprocess.run(
         [sys.executable, str(script), "--recipe.steps=[10,20]", "--recipe.betas=[0.5,0.0]"],
         capture_output=True,
@@ -118,7 +118,7 @@ def test_a_steps_list_that_does_not_match_the_rounds_is_refused_in_one_line():
 
 
 def test_a_failed_training_run_is_named_in_one_line_with_its_log(tmp_path):
-    script = Path(__file__).parents[2] / "scripts" / "train_default_policy.py"
+    script = Path(__file__).parents[2] / "scripts" / "train" / "train_default_policy.py"
     args = ["--recipe.demos=2", "--recipe.steps=[2]", "--recipe.betas=[]", "--recipe.batch_size=0"]
     result = subprocess.run(
         [sys.executable, str(script), f"--recipe.output_dir={tmp_path}", *args],

@@ -7,13 +7,12 @@ import subprocess
 import sys
 
 import pytest
-from lerobot_contrast.so101 import plan
-from lerobot_contrast.ports import free_port
-from lerobot_contrast.twin.launch import start_twin
 
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.so101 import arm
-from tests.study_scripts import SCRIPTS, load_script
+from lerobot_contrast.ports import free_port
+from lerobot_contrast.so101 import arm, plan
+from lerobot_contrast.twin.launch import start_twin
+from tests.study_scripts import load_script, script_path
 
 INSTRUCTION = "put the red cube in the left bin"
 
@@ -42,7 +41,7 @@ INSTRUCTION = "put the red cube in the left bin"
     ],
 )
 def test_the_loops_scripts_answer_bad_flags_in_one_line(script, flags, said, tmp_path):
-    done = subprocess.run([sys.executable, SCRIPTS / f"{script}.py", *flags], capture_output=True, text=True,
+    done = subprocess.run([sys.executable, script_path(script), *flags], capture_output=True, text=True,
                           cwd=tmp_path, timeout=120)  # fmt: skip
     assert done.returncode == 2 and done.stderr.startswith(f"error: {said}"), done.stderr
     assert done.stderr.count("\n") == 1

@@ -11,11 +11,11 @@ import pytest
 import zmq
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.ports import free_port
 from lerobot_contrast.twin.board import NAME, add_board, remove_board
 from lerobot_contrast.twin.camera import CameraArgs, TwinCamera
 from lerobot_contrast.twin.camera_server import CameraServer, robot_cameras, serve_camera
 from lerobot_contrast.twin.lens import LensArgs
-from lerobot_contrast.ports import free_port
 
 TARGET = (0.30, 0.0, 0.0)  # so101_blocks' workspace centre
 BOARD = {"x": 0.32, "y": -0.02, "yaw_deg": 12.0}

@@ -9,13 +9,13 @@ import sys
 
 import numpy as np
 import pytest
-from lerobot_teleoperator_so101_demo import SO101Demo, SO101DemoConfig, plan
+from lerobot_teleoperator_so101_demo import SO101Demo, SO101DemoConfig
 from lerobot_teleoperator_so101_demo import so101_demo as demo_module
-from lerobot_contrast.ports import free_port
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.so101 import arm
+from lerobot_contrast.ports import free_port
+from lerobot_contrast.so101 import arm, plan
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement import PlacementServer
 from lerobot_contrast.twin.scene import build_spec
@@ -128,12 +128,12 @@ def test_the_cubes_are_placed_anew_at_each_reset_and_the_plan_restarts_after_the
 
 def test_a_twin_that_does_not_answer_is_one_line():
     config = SO101DemoConfig(placement=f"tcp://127.0.0.1:{free_port()}", instruction=INSTRUCTION)
-    with pytest.raises(UserError, match=r"^so101_demo: the twin's placement socket .* did not answer"):
+    with pytest.raises(UserError, match=r"^so101_demo: no twin answers on tcp://127.0.0.1:\d+ within 5 s; start it"):
         SO101Demo(config).connect()
 
 
 def test_the_recording_script_answers_a_bad_instruction_in_one_line(tmp_path):
-    script = "scripts/record_so101_demos.py"
+    script = "scripts/train/record_so101_demos.py"
     done = subprocess.run([sys.executable, script, f"--output={tmp_path / 'd'}", "--task=juggle"],
                           capture_output=True, text=True, timeout=60)  # fmt: skip
     assert done.returncode == 2 and done.stderr.startswith("error: --task: the instruction 'juggle' is none of")
@@ -142,7 +142,7 @@ def test_the_recording_script_answers_a_bad_instruction_in_one_line(tmp_path):
 
 def test_as_an_evaluator_policy_it_carries_out_each_trials_goal_on_the_true_scene(placement, monkeypatch):
     from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
-    from lerobot_teleoperator_so101_demo import policy as policy_module
+    from lerobot_contrast.twin import demonstrator as policy_module
 
     from lerobot_contrast import PolicyArgs, TrialContext, make_policy
 
@@ -150,7 +150,9 @@ def test_as_an_evaluator_policy_it_carries_out_each_trials_goal_on_the_true_scen
     monkeypatch.setattr(policy_module.time, "monotonic", lambda: clock[0])
     robot = SO101Follower(SO101FollowerConfig(port="unused", id="demo"))
     task = load_task_file("so101_red_left")
-    demonstrator = make_policy(PolicyArgs(type="so101_demonstrator", placement=placement.address), robot, task)
+    demonstrator = make_policy(
+        PolicyArgs(type="so101_demonstrator", options={"placement": placement.address}), robot, task
+    )
     base = task.sample(1, np.random.default_rng(0))[0]
     flipped = task.perturbations.get("LB2").apply(base, np.random.default_rng(0))  # "... in the right bin"
     for name, pose in base.scene.objects.items():  # the operator staged the trial's scene

@@ -6,7 +6,6 @@ import json
 import os
 import shlex
 import signal
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -15,8 +14,8 @@ import numpy as np
 import pytest
 
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan
 from lerobot_contrast.ports import free_port
+from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan
 
 FRAME = ("--width=160", "--height=120")  # a small camera keeps the test quick; the bench times 640x480
 RUN = ("--task=so101_blocks", "--strategy=contrast", "--n_instances=1", "--perturbations=L,S1", "--fps=30")

@@ -14,13 +14,13 @@ import pytest
 import zmq
 
 from lerobot_contrast.domains.task_file import load_task_file
+from lerobot_contrast.ports import free_port
 from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement import PlacementServer
 from lerobot_contrast.twin.placement_client import request
 from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
-from lerobot_contrast.ports import free_port
 from tests.twin.test_bus import connected
 
 POSE = {"shoulder_pan.pos": 20.0, "shoulder_lift.pos": -30.0, "elbow_flex.pos": 40.0, "wrist_flex.pos": 60.0,

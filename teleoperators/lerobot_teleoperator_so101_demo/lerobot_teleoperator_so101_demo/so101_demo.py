@@ -12,9 +12,8 @@ from lerobot.teleoperators.teleoperator import Teleoperator
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import load_task_file
-from lerobot_contrast.so101 import arm
+from lerobot_contrast.so101 import arm, plan
 from lerobot_contrast.twin.placement_client import PlacementClient, TwinError
-from lerobot_contrast.so101 import plan
 from lerobot_teleoperator_so101_demo.config_so101_demo import SO101DemoConfig
 
 DEFAULT_EPISODE_S = 60.0  # lerobot-record's own default for --dataset.episode_time_s

@@ -2,7 +2,7 @@
 left, the so101_blocks first trial as the operator starts staging it; right, after staging with the red cube 5 cm
 off, as the check reports it.
 
-    .venv/bin/python scripts/figure_staging.py [OUT.png]
+    .venv/bin/python scripts/figures/figure_staging.py [OUT.png]
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from lerobot_contrast.domains.task_file.loader import load_task_file
 from lerobot_contrast.staging import overlay
 from lerobot_contrast.staging.homography import CameraCalibration
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures" / "staging_overlay.png"
+OUT = Path(__file__).resolve().parents[2] / "docs" / "figures" / "staging_overlay.png"
 CUBE = tabletop.SHAPE_FOOTPRINT["cube"][0]
 
 

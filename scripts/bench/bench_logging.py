@@ -6,7 +6,7 @@ step the simulator) before it sleeps until the next tick. Overhead per step = bu
 busy time of the bare loop, in ms and as a fraction of the 100 ms control period. Episodes of the three variants
 are interleaved so machine load affects them alike. `start()` and `end()` (opening the dataset, writing the
 episode) are reported separately: they run between episodes, when the robot is idle.
-Usage: python scripts/bench_logging.py [--episodes 4] [--steps 40]. The last line is machine-readable.
+Usage: python scripts/bench/bench_logging.py [--episodes 4] [--steps 40]. The last line is machine-readable.
 """
 
 from __future__ import annotations

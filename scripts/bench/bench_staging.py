@@ -5,7 +5,7 @@ the synthetic webcam (640 x 480, oblique poses at elevation 25-85 degrees, any a
 workspace is placed from where it is, and the farthest the colour check places four 3 cm cubes standing at the
 workspace's corners, with the lens measured and with the homography alone, and how many poses calibrate refuses.
 
-    .venv/bin/python scripts/bench_staging.py [--layouts=200] [--poses=12]
+    .venv/bin/python scripts/bench/bench_staging.py [--layouts=200] [--poses=12]
 
 Figures last, on one line: name=value pairs (pixels at 320 x 180 and 640 x 360; centimetres).
 """

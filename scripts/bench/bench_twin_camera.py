@@ -5,7 +5,7 @@ Figures last: render_ms= lens_ms= jpeg_ms= publish_ms= frame_ms= max_fps= cpu_ms
 (medians of wall time; cpu_ms is the CPU time one frame costs, the renderer's worker threads included: on a busy
 machine wall times grow, CPU time much less.)
 
-    .venv/bin/python scripts/bench_twin_camera.py [--frames=150] [--seconds=5] [--port=5555]
+    .venv/bin/python scripts/bench/bench_twin_camera.py [--frames=150] [--seconds=5] [--port=5555]
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ Then the per-trial time of the stopping machinery (goal: < 1% of a 10 Hz control
 Each base has 1 to 10 trials (uneven clusters) sharing a success probability drawn from Beta(5r, 5(1 - r)) (the
 heterogeneity of tests/test_stats.py); an SPL-like outcome is success times a path efficiency ~ Beta(8, 2).
 
-    .venv/bin/python scripts/validate_sequential.py [--studies=1000] [--seed=0]
+    .venv/bin/python scripts/study/validate_sequential.py [--studies=1000] [--seed=0]
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """A long simulated session (the oracle on the Language-Table simulator, i.i.d. trials) with Rerun and dataset
 recording on, through the same robot, policy and observers as `python -m lerobot_contrast.eval`. Threads, open
 files, RSS and seconds per trial are sampled as it goes: none of them should grow with the number of episodes.
-Usage: python scripts/soak.py [--trials 2000] [--every 100] [--output_dir DIR]. The last line is machine-readable.
+Usage: python scripts/bench/soak.py [--trials 2000] [--every 100] [--output_dir DIR]. The last line is machine-readable.
 """
 
 from __future__ import annotations

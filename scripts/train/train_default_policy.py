@@ -1,6 +1,6 @@
 """Reproduce the shipped `tabletop_pointer` weights from a seed: demonstrations, LeRobot training, DAgger, evaluation.
 
-    .venv/bin/python scripts/train_default_policy.py --recipe.output_dir=outputs/default_policy --recipe.seed=0 --ship=true
+    .venv/bin/python scripts/train/train_default_policy.py --recipe.output_dir=outputs/default_policy --recipe.seed=0 --ship=true
 
 Started again with the same settings it resumes where it stopped. The last line is the figures, as name=value pairs.
 """

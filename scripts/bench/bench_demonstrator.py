@@ -1,7 +1,7 @@
 """The scripted demonstrator's success on every so101_blocks instruction (each template and wording, both bins, every
 cube), on the virtual SO-101 through LeRobot's own SO101Follower, judged from the twin's true scene.
 
-    python scripts/bench_demonstrator.py [--seed=0] [--episodes=24] [--pace=1.5]
+    python scripts/bench/bench_demonstrator.py [--seed=0] [--episodes=24] [--pace=1.5]
 
 Prints one line per episode, then `episodes=.. success=.. mean_episode_s=..` last."""
 
@@ -80,10 +80,10 @@ def main() -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")
     from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
     from lerobot_teleoperator_so101_demo import SO101Demo, SO101DemoConfig
-    from lerobot_contrast.ports import free_port
-    from lerobot_contrast.twin.launch import start_twin
 
     from lerobot_contrast.domains.task_file import load_task_file
+    from lerobot_contrast.ports import free_port
+    from lerobot_contrast.twin.launch import start_twin
 
     task = load_task_file("so101_blocks")
     every = instructions(task)

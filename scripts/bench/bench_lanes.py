@@ -2,8 +2,8 @@
 trial for trial (up to wall-clock fields). Figures last: trials=... wall_1lane_s=... wall_lanes_s=... speedup=...
 identical=true|false.
 
-    .venv/bin/python scripts/bench_lanes.py                      # the default evaluation (the README's first command)
-    .venv/bin/python scripts/bench_lanes.py --n_instances=10 --busy   # the lanes alone, then beside busy processes
+    .venv/bin/python scripts/bench/bench_lanes.py                      # the default evaluation (the README's first command)
+    .venv/bin/python scripts/bench/bench_lanes.py --n_instances=10 --busy   # the lanes alone, then beside busy processes
 
 With --busy the figures are the lanes' run alone and beside processes that keep cores busy: its share of a core
 (CPU-s per wall-s), its throughput (trials per wall-s) and CPU-s per trial in each, and `proportional`, the ratio

@@ -3,7 +3,7 @@ whole 10 Hz control step (render + preprocess + select_action + postprocess + si
 
 The policy is full size (CLIP ViT-B/16 text tower), random weights in the released shapes, written by this script in
 LeRobot's pretrained format; it is loaded and timed in a fresh process, whose peak memory is reported.
-Usage: python scripts/bench_lt_policy.py [--steps 60] [--threads 1]. The last line is machine-readable.
+Usage: python scripts/bench/bench_lt_policy.py [--steps 60] [--threads 1]. The last line is machine-readable.
 """
 
 from __future__ import annotations

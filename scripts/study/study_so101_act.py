@@ -4,7 +4,7 @@ the task `so101_red_left` (bases: "put the red cube in the left bin" in new plac
 scripted demonstrator, which reads the words, runs the same plan as the reference. Each run resumes where a kill
 left it; the report compares the two.
 
-    python scripts/study_so101_act.py --checkpoint=DIR --output=DIR [--n_instances=30] [--max_episode_s=12]
+    python scripts/study/study_so101_act.py --checkpoint=DIR --output=DIR [--n_instances=30] [--max_episode_s=12]
         [--policies=act,demonstrator] [--compare=DIR --policies=ab] [--placement_error=none]
         [--width=160 --height=120]
 
@@ -49,7 +49,7 @@ def frame_size(checkpoint: Path) -> tuple[int, int]:
 def eval_command(args: argparse.Namespace, twin, policy: str, run_dir: Path) -> list[str]:
     chosen = {
         "act": [f"--policy.path={args.checkpoint}", "--policy.device=cpu"],
-        "demonstrator": ["--policy.type=so101_demonstrator", f"--policy.placement={twin.placement}"],
+        "demonstrator": ["--policy.type=so101_demonstrator", f"--policy.options={{placement: {twin.placement}}}"],
         "ab": [f"--policies={args.checkpoint}:device=cpu,{args.compare}:device=cpu", "--stop.decided=true"],
     }[policy]
     if started(run_dir):  # a killed run: the evaluator's own resume, on this twin's new ports
@@ -138,10 +138,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
-    from lerobot_contrast.twin.launch import running_twin
-
     from lerobot_contrast.contrast.errors import UserError
     from lerobot_contrast.domains.task_file import load_task_file
+    from lerobot_contrast.twin.launch import running_twin
     from lerobot_contrast.twin.placement_client import PlacementClient
     from lerobot_contrast.twin.scene import start_poses
 
@@ -151,7 +150,10 @@ def main(argv: list[str] | None = None) -> int:
     flags = ["--task=so101_red_left", f"--seed={args.seed}", "--fps=30", f"--width={width}", f"--height={height}"]
     try:
         with running_twin(*flags) as twin:
-            placement, storage = PlacementClient(twin.placement), start_poses(load_task_file("so101_red_left").spec, None)
+            placement, storage = (
+                PlacementClient(twin.placement),
+                start_poses(load_task_file("so101_red_left").spec, None),
+            )
             for policy, run_dir in zip(args.policies, runs, strict=True):
                 if not started(run_dir):  # the objects wait in their storage row, where a new run's plan starts
                     for name, pose in storage.items():

@@ -2,7 +2,7 @@
 demonstrator (`--teleop.type=so101_demo`), and check that the LeRobotDataset it wrote loads. The same seed remakes the
 same placements; an interrupted recording is resumed where it stopped by running the same command again.
 
-    python scripts/record_so101_demos.py --seed=0 --episodes=100 --output=DIR
+    python scripts/train/record_so101_demos.py --seed=0 --episodes=100 --output=DIR
         [--task="put the red cube in the left bin"] [--episode_time_s=12] [--reset_time_s=1] [--width=320 --height=240]
         [--fps=30] [--pace=1.5] [--tries=5] [--video] [--shards=1]
 
@@ -146,10 +146,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    from lerobot_contrast.so101.plan import goal_of
-
     from lerobot_contrast.contrast.errors import UserError
     from lerobot_contrast.domains.task_file import load_task_file
+    from lerobot_contrast.so101.plan import goal_of
 
     try:
         goal_of(load_task_file("so101_blocks"), args.task)  # before the twin starts: a typo is one line at once

@@ -14,7 +14,7 @@ replacement (each base with its trials, their staging cost and B's paired trials
   the best constant bet on these bases' differences (Wald's identity): the floor that bounded outcomes set;
 - the per-perturbation means' mean absolute error at the width stop and at the fixed n, against all of A's bases.
 
-    .venv/bin/python scripts/savings_sequential.py RUN_A RUN_B [--width=0.1] [--alpha=0.05] [--studies=1000]
+    .venv/bin/python scripts/study/savings_sequential.py RUN_A RUN_B [--width=0.1] [--alpha=0.05] [--studies=1000]
 """
 
 from __future__ import annotations

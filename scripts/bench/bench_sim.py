@@ -1,7 +1,7 @@
 """Language-Table sim speed on one CPU core: env steps/s with the camera image and without, vs the benchmark.
 
 Also times the whole evaluation loop in episodes per minute.
-Usage: python scripts/bench_sim.py [--episodes 30] [--seed 0] [--eval_instances 25]. The last line is machine-readable.
+Usage: python scripts/bench/bench_sim.py [--episodes 30] [--seed 0] [--eval_instances 25]. The last line is machine-readable.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Train `vln_navigator` weights from a seed: teacher demonstrations, LeRobot training, DAgger, evaluation on 250
 held-out arrangements (weights/TRAINING.md says which run the shipped weights came from).
 
-    nice -n 10 .venv/bin/python scripts/train_nav_policy.py --recipe.output_dir=outputs/nav_policy --recipe.seed=0 --ship=true
+    nice -n 10 .venv/bin/python scripts/train/train_nav_policy.py --recipe.output_dir=outputs/nav_policy --recipe.seed=0 --ship=true
 
 Started again with the same settings it resumes where it stopped. The last line is the figures, as name=value pairs.
 """

@@ -6,7 +6,7 @@ loopback, and ray-cast renders per second.
 - fps_640x480: observations per second a client receives when every one carries a new 640x480 JPEG (the host
   encodes each, as it does camera frames on the robot; the client decodes each), host publishing flat out.
 - sim_render_fps: RGB-D ray-cast renders per second of the furnished studio at 640x480.
-Usage: python scripts/bench_locobot.py [--seconds 5] [--steps 200]. The last line is machine-readable.
+Usage: python scripts/bench/bench_locobot.py [--seconds 5] [--steps 200]. The last line is machine-readable.
 """
 
 from __future__ import annotations

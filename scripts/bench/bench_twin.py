@@ -8,7 +8,7 @@ Figures last: connect_s=... connect_failures=... (before the first connect that 
 sync_write_ms=... write_ms=... lost_calls=... project_code_loaded=false [flagged_4cm=... measured_cost_err_cm_4cm=...
 measured_cube_err_cm_4cm=... (and the same for 0.5 cm) period_ms=...].
 
-    .venv/bin/python scripts/bench_twin.py [--eval --instances=4]
+    .venv/bin/python scripts/bench/bench_twin.py [--eval --instances=4]
 """
 
 from __future__ import annotations
@@ -192,18 +192,17 @@ def cube_errors(staging: dict, truth: str) -> list[float]:
 
 
 def save_act(directory: Path) -> Path:
-    """A random-weight ACT shaped as scripts/train_so101_act.py trains one for this CPU (frames of 160x120, its
+    """A random-weight ACT shaped as scripts/train/train_so101_act.py trains one for this CPU (frames of 160x120, its
     transformer and chunks): the camera's 640x480 frames reach it scaled, as they would a policy recorded at 160x120."""
     from lerobot.cameras.zmq import ZMQCameraConfig
 
     from lerobot_contrast.policies.pretrained import save_fresh_policy
+    from lerobot_contrast.training.act_recipe import ARCHITECTURE
 
-    recipe = {"dim_model": 256, "dim_feedforward": 1024, "n_encoder_layers": 4, "n_decoder_layers": 1,
-              "chunk_size": 50, "n_action_steps": 25, "use_vae": False}  # fmt: skip
     camera = ZMQCameraConfig(server_address="127.0.0.1", port=5555, camera_name="front", width=160, height=120, fps=30)
     config = SO101FollowerConfig(port="unused", id="act", calibration_dir=directory / "calibration",
                                  cameras={"front": camera})  # fmt: skip
-    return save_fresh_policy(SO101Follower(config), "act", directory, device="cpu", **recipe)
+    return save_fresh_policy(SO101Follower(config), "act", directory, device="cpu", **ARCHITECTURE)
 
 
 def main() -> None:

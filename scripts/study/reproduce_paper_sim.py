@@ -23,7 +23,7 @@ The analysis gives, beside the paper's figures: the standard evaluation's cost, 
 the absolute SPL error at that cost per strategy, SPL per perturbation with intervals paired against each base's
 original, and a verdict on each of the paper's four simulation findings, computed from those numbers.
 
-Usage: python scripts/reproduce_paper_sim.py [--sweep lerobot_contrast/sweep/studies/paper_sim.yaml] [--output_dir outputs/paper_sim]
+Usage: python scripts/study/reproduce_paper_sim.py [--sweep lerobot_contrast/sweep/studies/paper_sim.yaml] [--output_dir outputs/paper_sim]
        [--seeds 0 1 2] [--n_instances 250] [--max_episode_steps 200] [--num_cpus N] [--ray_address auto]
 (--seeds, --n_instances and --max_episode_steps override the sweep file's.)
 Writes OUTPUT_DIR/runs/<strategy>,seed=<k>/ (re-running the script resumes or skips them), OUTPUT_DIR/runs/

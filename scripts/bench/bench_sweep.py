@@ -1,7 +1,7 @@
 """Benchmark of the sweep engine: the same simulated cells run one after another in this process (no Ray), then
 as a sweep on a local Ray with 1 worker, then with 2 workers.
 
-Usage: python scripts/bench_sweep.py [--cells 8] [--n_instances 60] [--max_episode_steps 100]
+Usage: python scripts/bench/bench_sweep.py [--cells 8] [--n_instances 60] [--max_episode_steps 100]
 The last line is `cells=... wall_1worker_s=... wall_2workers_s=... speedup=... overhead_per_cell_s=...`: speedup is
 1 worker's wall time over 2 workers', and the overhead per cell is the 1-worker sweep's wall time less the
 sequential one, per cell. The line before gives Ray's startup (not in the overhead) and inside_cells_1worker_s, the

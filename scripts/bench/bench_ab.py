@@ -7,9 +7,9 @@ pairs=... restage_cost_share=... bases_to_decide=... fixed_n_bases=...
 - bases_to_decide: complete bases after which the session's sequential paired test (per base, at --alpha) was
   decided, the point where --stop.decided=true ends it ("undecided>N" when the plan's N bases did not decide);
 - fixed_n_bases: the fewest bases a fixed-n paired t-test at --alpha needs for the power the sequential test has
-  on these bases (resampled with replacement, as scripts/savings_sequential.py does).
+  on these bases (resampled with replacement, as scripts/study/savings_sequential.py does).
 
-    .venv/bin/python scripts/bench_ab.py [--n_instances=40] [--perturbations=LB1,SB1] [--max_episode_steps=200]
+    .venv/bin/python scripts/bench/bench_ab.py [--n_instances=40] [--perturbations=LB1,SB1] [--max_episode_steps=200]
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).parents[1] / "study"))
 from savings_sequential import compare_stop, fixed_bases_at_power, tables  # noqa: E402
 
 COPY = "tabletop_pointer:noise_std=0.02"

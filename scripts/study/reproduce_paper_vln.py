@@ -13,7 +13,7 @@ The scripted route follower runs both as a calibration row: it reads the goal fr
 what it does and the other perturbations only give it a new route (it runs without rendering the camera it does not
 read).
 
-Usage: python scripts/reproduce_paper_vln.py [--output_dir outputs/paper_vln] [--seeds 0 1 2] [--n_instances 100]
+Usage: python scripts/study/reproduce_paper_vln.py [--output_dir outputs/paper_vln] [--seeds 0 1 2] [--n_instances 100]
        [--num_cpus N] [--paper_only] [--repeats 3] [--max_episode_steps N]
 Writes OUTPUT_DIR/runs/... (a run per cell) and OUTPUT_DIR/reproduction.md (the table beside the paper's
 figures, and a verdict per finding). Re-running resumes or skips finished runs. The last line is

@@ -2,7 +2,7 @@
 an idle machine). Beside them, in the same run: a bare interpreter's start and the import of LeRobot's robots (torch),
 which the check must not wait for, so `*_vs_lerobot` stays comparable across loads; the load average is printed too.
 
-Usage: .venv/bin/python scripts/bench_flag_errors.py [--repeats N]; the last line holds the figures as name=value."""
+Usage: .venv/bin/python scripts/bench/bench_flag_errors.py [--repeats N]; the last line holds the figures as name=value."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """Closed-loop figures of the VLN policies on held-out arrangements (the evaluation split, a seed training never
 used): the learned navigator (shipped weights, or --model), a uniform random navigator and the scripted route
-follower, all in the same simulator and on the same arrangements as scripts/train_nav_policy.py's final check.
+follower, all in the same simulator and on the same arrangements as scripts/train/train_nav_policy.py's final check.
 
-    nice -n 10 .venv/bin/python scripts/bench_nav_policies.py --n 250 --policies learned random route_follower
+    nice -n 10 .venv/bin/python scripts/bench/bench_nav_policies.py --n 250 --policies learned random route_follower
 
 The last line is `n=... <policy>_success=... <policy>_progress=... <policy>_spl=...` for each policy.
 """

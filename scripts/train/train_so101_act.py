@@ -2,16 +2,10 @@
 sized for a CPU. Run it again after a kill and it resumes from the last checkpoint; run it with more `--steps` and it
 trains on from there.
 
-    python scripts/train_so101_act.py --dataset=DIR --output=DIR [--steps=6000] [--batch_size=16] [--save_freq=500]
+    python scripts/train/train_so101_act.py --dataset=DIR --output=DIR [--steps=6000] [--batch_size=16] [--save_freq=500]
         [--seed=1000] [-- more lerobot-train flags]
 
-The recipe, and why (a 2-core CPU, frames of 160x120, no download of backbone weights):
-- ResNet-18 from scratch (`pretrained_backbone_weights=null`): nothing may download ImageNet weights here. On a
-  machine that has them cached, drop that flag.
-- No VAE (`use_vae=false`): the scripted demonstrator is deterministic, so there is one mode to fit; the VAE encoder
-  would cost more than the backbone at this frame size.
-- A smaller transformer (dim 256, feed-forward 1024, 4 encoder layers, 1 decoder layer), chunks of 50 steps
-  (1.7 s at 30 Hz) run 25 steps at a time, learning rate 1e-4 for the backbone too (it starts from scratch).
+The recipe and why: lerobot_contrast/training/act_recipe.py (the same network scripts/bench/bench_twin.py times).
 
 Prints `steps=.. wall_s=.. steps_per_s=.. checkpoint=.. checkpoint_mb=..` last."""
 
@@ -26,22 +20,14 @@ import time
 from pathlib import Path
 
 from lerobot_contrast.flags import ScriptParser
+from lerobot_contrast.training import act_recipe
 
 REPO_ID = "local/so101_demos"
 RECIPE = (
     "--policy.type=act",
     "--policy.device=cpu",
     "--policy.push_to_hub=false",
-    "--policy.pretrained_backbone_weights=null",
-    "--policy.use_vae=false",
-    "--policy.dim_model=256",
-    "--policy.dim_feedforward=1024",
-    "--policy.n_encoder_layers=4",
-    "--policy.n_decoder_layers=1",
-    "--policy.chunk_size=50",
-    "--policy.n_action_steps=25",
-    "--policy.optimizer_lr=1e-4",
-    "--policy.optimizer_lr_backbone=1e-4",
+    *act_recipe.policy_flags(),
     "--wandb.enable=false",
     "--env_eval_freq=0",
     "--log_freq=50",
