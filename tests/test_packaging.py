@@ -84,3 +84,61 @@ def test_the_evaluator_and_the_locobot_plugin_both_depend_on_the_navigation_prot
         assert "navigation_protocol<0.3,>=0.2.0" in importlib.metadata.requires(name)
     assert importlib.metadata.requires("navigation_protocol") is None
     assert "lerobot_contrast" not in " ".join(importlib.metadata.requires("lerobot_robot_locobot"))
+
+
+def _pyprojects() -> dict[str, tuple[Path, set[str]]]:
+    """Each of this repository's distributions: its folder and the repository's distributions it requires (extras
+    included), read from every pyproject.toml."""
+    import re
+    import tomllib
+
+    found = {}
+    for path in ROOT.rglob("pyproject.toml"):
+        if ".venv" in path.parts:
+            continue
+        project = tomllib.loads(path.read_text(encoding="utf-8"))["project"]
+        requires = list(project.get("dependencies", []))
+        requires += [r for group in project.get("optional-dependencies", {}).values() for r in group]
+        names = {re.match(r"[A-Za-z0-9_.-]+", r).group(0).replace("-", "_").lower() for r in requires}
+        found[project["name"]] = (path.parent, names)
+    return {name: (folder, needs & set(found) - {name}) for name, (folder, needs) in found.items()}
+
+
+def _needs_all(name: str, graph: dict[str, set[str]]) -> set[str]:
+    seen, todo = set(), [name]
+    while todo:
+        for need in graph[todo.pop()] - seen:
+            seen.add(need)
+            todo.append(need)
+    return seen
+
+
+def test_no_two_distributions_require_each_other_directly_or_through_others():
+    graph = {name: needs for name, (_, needs) in _pyprojects().items()}
+    assert set(graph) == set(DISTRIBUTIONS)
+    circles = sorted(name for name in graph if name in _needs_all(name, graph))
+    assert not circles, f"distributions in a circle of requirements: {circles}"
+
+
+def test_no_module_names_a_module_of_a_distribution_its_own_does_not_require():
+    """Imports, and "module:function" strings (registries, entry points), of each distribution's own package."""
+    import re
+
+    projects = _pyprojects()
+    graph = {name: needs for name, (_, needs) in projects.items()}
+    named = re.compile(r"^([a-z0-9_]+)(?:\.[a-z0-9_]+)*:[a-z0-9_]+$")
+    wrong = []
+    for name, (folder, _) in projects.items():
+        allowed = _needs_all(name, graph) | {name}
+        for path in (folder / name).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+                if isinstance(node, ast.Import):
+                    tops = [alias.name.split(".")[0] for alias in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+                    tops = [node.module.split(".")[0]]
+                elif isinstance(node, ast.Constant) and isinstance(node.value, str) and named.match(node.value):
+                    tops = [node.value.split(".")[0].split(":")[0]]
+                else:
+                    continue
+                wrong += [f"{path.relative_to(ROOT)} names {top}" for top in tops if top in graph and top not in allowed]
+    assert not wrong, wrong
