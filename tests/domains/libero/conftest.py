@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-NEEDS = "LIBERO is installed by the test set-up: bash scripts/setup.sh --libero"
+NEEDS = "LIBERO is installed by the test set-up: bash scripts/setup.sh --dev"
 
 
 @pytest.fixture(scope="package")

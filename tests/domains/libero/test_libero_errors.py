@@ -28,7 +28,7 @@ def _eval(*args: str, env: dict[str, str] | None = None) -> subprocess.Completed
     ],
 )
 def test_an_unknown_suite_or_task_id_is_one_line(args, expected, capsys):
-    pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --libero")
+    pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --dev")
     from lerobot_contrast.eval import main
 
     assert main([*args, "--dry_run=true"]) != 0
@@ -39,7 +39,7 @@ def test_an_unknown_suite_or_task_id_is_one_line(args, expected, capsys):
 
 @pytest.mark.slow
 def test_no_rendering_backend_is_one_line_naming_what_to_install():
-    pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --libero")
+    pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --dev")
     result = _eval("--task=libero_goal", env={"MUJOCO_GL": "nonesuch"})
     expected = "no rendering backend: MUJOCO_GL=nonesuch"
     assert result.returncode != 0 and "apt-get install" in result.stderr

@@ -10,7 +10,7 @@ from lerobot_contrast import load_task
 from lerobot_contrast.contrast.task import perturb
 from lerobot_contrast.domains.libero import goals
 
-pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --libero")
+pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --dev")
 pytestmark = pytest.mark.slow
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --libero")
+pytest.importorskip("libero", reason="LIBERO is installed by the test set-up: bash scripts/setup.sh --dev")
 pytestmark = pytest.mark.slow
 ARGS = [
     "--task=libero_object", "--families=task0", "--n_instances=1", "--seed=0", "--strategy=contrast",
