@@ -11,7 +11,9 @@ from typing import TYPE_CHECKING, Any
 from lerobot_contrast.config import ConfigError, EvalConfig
 from lerobot_contrast.contrast.staging import reports_scene
 from lerobot_contrast.contrast.task import Task
-from lerobot_contrast.operator_console import Answers, OperatorConsole
+from lerobot_contrast.operators.base import Operator
+from lerobot_contrast.operators.channel import Channel
+from lerobot_contrast.operators.console import Answers, OperatorConsole
 from lerobot_contrast.policies import policy_entry
 from lerobot_contrast.record.observer import EpisodeObserver
 
@@ -110,7 +112,7 @@ def make_observers(cfg: EvalConfig, task: Task, robot: Robot, run_dir: Path) -> 
     return observers
 
 
-def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> OperatorConsole | None:
+def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Operator | None:
     """The operator console that stages and labels each trial, or None where the robot does it (--operator=auto)."""
     scene_io = reports_scene(robot, task.storage_scene().objects)
     mode = cfg.operator or ("auto" if scene_io else "console")
@@ -127,7 +129,8 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
 
     # The run directory is chosen after the console is built; the bench reads it when it first keeps a measurement.
     bench = make_bench(cfg.staging, cfg.task, task, robot, cfg.cost, lambda: cfg.output_dir)
-    return OperatorConsole(Answers(sys.stdin), unit=unit, bench=bench)
+    channel = None if cfg.operator_channel is None else Channel(cfg.operator_channel)
+    return OperatorConsole(Answers(sys.stdin), unit=unit, bench=bench, channel=channel)
 
 
 def run_fps(cfg: EvalConfig, robot: Robot) -> float | None:

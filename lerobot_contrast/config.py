@@ -97,6 +97,9 @@ class EvalConfig:
     # Who stages scenes and judges outcomes: console (an operator, prompted between trials) or auto (the robot
     # reports and stages its own scene, as in simulation). Default: auto where the robot can, else console.
     operator: str | None = None
+    # With --operator=console: also write each of the console's prompts as one JSON line to this file, FIFO or
+    # /dev/fd/N, for a program that answers the console (the twin's scripted person; docs: unattended.md).
+    operator_channel: str | None = None
     # Map robot observation keys to the policy's input features, e.g. {"observation.images.top": "observation.images.front"}.
     rename_map: dict[str, str] = field(default_factory=dict)
     # Re-run a published or local evaluation's plan (its task, instances, perturbations, order and budget)
@@ -144,7 +147,7 @@ def resume_args(argv: list[str]) -> list[str]:
 
 # Choices of one session that a resumed run may make differently (the staging camera's included), so they are not
 # stored in config.json.
-SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging")
+SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging", "operator_channel")
 
 
 # Settings of interleaved runs (--policies), left out of a single-policy run's config.json while at their default.

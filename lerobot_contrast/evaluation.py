@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lerobot_contrast.console import trial_line
 from lerobot_contrast.contrast.adaptive import next_trial
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
@@ -24,7 +23,7 @@ from lerobot_contrast.contrast.stopping import Monitor, StopRule
 from lerobot_contrast.contrast.strategy import PlannedTrial, exceeds_budget
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
-from lerobot_contrast.operator_console import OperatorConsole
+from lerobot_contrast.operators.base import Operator
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.lost_trials import drop_lost_trials
 from lerobot_contrast.record.observer import EpisodeObserver
@@ -34,6 +33,7 @@ from lerobot_contrast.record.run_dir import RunDir, disk_full_said, open_run_dir
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.runner import RobotRunner
+from lerobot_contrast.terminal.lines import trial_line
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
@@ -60,7 +60,7 @@ class Evaluation:
     policy: Policy | None = None
     robot: Robot = None
     observers: Sequence[EpisodeObserver] = ()  # watch each episode the robot runs, then get its scored record
-    operator: OperatorConsole | None = None  # None: the robot stages and reports its own scene (a simulator)
+    operator: Operator | None = None  # None: the robot stages and reports its own scene (a simulator)
     fps: float | None = None  # control rate; None: as fast as the robot steps
     max_steps: int = 200
     max_episode_s: float | None = None
@@ -247,7 +247,7 @@ def _executor(ev: Evaluation, state: LoopState) -> Execute:
     if ev.robot is None or ev.policy is None:
         raise UserError("an Evaluation needs a robot and a policy, or `execute` to run each trial")
     if ev.lanes > 1 and ev.operator is None and not ev.adaptive and getattr(ev.robot, "simulated", False):
-        from lerobot_contrast.lane_runner import LaneRunner
+        from lerobot_contrast.lanes.runner import LaneRunner
 
         return LaneRunner(
             ev.task, ev.plan[state.next_index :], ev.seed, (state.scene, state.previous), ev.robot, ev.lanes,

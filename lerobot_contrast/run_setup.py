@@ -18,16 +18,16 @@ from lerobot_contrast.build import (
     run_fps,
 )
 from lerobot_contrast.config import ConfigError, EvalConfig, config_json
-from lerobot_contrast.console import plan_lines
 from lerobot_contrast.contrast.stopping import StopRule
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.domains import load_task
-from lerobot_contrast.lane_choice import choose_lanes, lane_threads, parse_lanes
-from lerobot_contrast.operator_console import OperatorConsole
+from lerobot_contrast.lanes.choice import choose_lanes, lane_threads, parse_lanes
+from lerobot_contrast.operators.base import Operator
 from lerobot_contrast.policies import Policy, default_policy, make_policy
 from lerobot_contrast.record.compare_run import compare_rule
 from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
+from lerobot_contrast.terminal.lines import plan_lines
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
@@ -195,7 +195,7 @@ def stop_rule(cfg: EvalConfig, plan: list[PlannedTrial]) -> StopRule | None:
 
 
 def equipped(
-    cfg: EvalConfig, planned: Evaluation, robot: Robot, policy: Policy, operator: OperatorConsole | None
+    cfg: EvalConfig, planned: Evaluation, robot: Robot, policy: Policy, operator: Operator | None
 ) -> Evaluation:
     """The planned evaluation with its connected robot, policy, operator and observers, recorded in cfg.output_dir."""
     fps = run_fps(cfg, robot)

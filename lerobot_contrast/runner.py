@@ -22,7 +22,7 @@ from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.staging import read_scene, reports_scene
 from lerobot_contrast.contrast.task import Judgement, Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
-from lerobot_contrast.operator_console import Label, OperatorConsole, SessionStopped, Staging
+from lerobot_contrast.operators.base import Label, Operator, SessionStopped, Staging
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver
 
@@ -69,7 +69,7 @@ class RobotRunner:
         policy: Policy,
         task: Task,
         *,
-        operator: OperatorConsole | None,
+        operator: Operator | None,
         fps: float | None,
         max_steps: int,
         max_episode_s: float | None = None,
@@ -219,7 +219,7 @@ class RobotRunner:
     def _interrupted(self, elapsed: float, observation: dict[str, Any]) -> str | None:
         if self.max_episode_s is not None and elapsed >= self.max_episode_s:
             return "max_time"
-        key = None if self.operator is None else self.operator.answers.take_key()
+        key = None if self.operator is None else self.operator.take_key()
         if key == "estop":
             self._hold(observation)
         return key

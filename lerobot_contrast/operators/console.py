@@ -1,7 +1,8 @@
-"""The operator console: what to stage before each trial, keys during it, and the outcome label after it.
+"""The person at the console: what to stage before each trial, keys during it, and the outcome label after it.
 
 Answers are lines read from a stream (the terminal, or a scripted file in tests and CI) on a background
-thread, so the control loop can poll for the in-trial keys without ever blocking on input.
+thread, so the control loop can poll for the in-trial keys without ever blocking on input. With a structured
+channel (channel.py), each prompt is also written as one JSON line for a program that answers it.
 """
 
 from __future__ import annotations
@@ -9,8 +10,7 @@ from __future__ import annotations
 import collections
 import threading
 import time
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 from typing import IO, Any
 
 from rich.console import Console
@@ -20,6 +20,8 @@ from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.operators.base import Label, SessionStopped, Staging
+from lerobot_contrast.operators.channel import Channel
 
 # In-trial keys (a letter, then Enter): end the episode as a success or a failure, or stop the robot now.
 TRIAL_KEYS = {"s": "success", "f": "failure", "e": "estop"}
@@ -29,10 +31,6 @@ AXIS_MEANING = {
     "S": "scene change, same behaviour",
     "SB": "scene change, new behaviour",
 }
-
-
-class SessionStopped(Exception):
-    """The operator stopped the session (or their input ended); the run is resumable."""
 
 
 class Answers:
@@ -70,39 +68,46 @@ class Answers:
             return self._lines.popleft()
 
 
-@dataclass(frozen=True)
-class Staging:
-    action: str  # "ready" | "skip" | "stop"
-    reset_s: float = 0.0
-    moved: float | None = None  # the operator's own figure for the distance moved, when it differs from the plan
-    measured: Mapping[str, Any] | None = None  # what a calibrated camera measured of the staging (staging/check.py)
-
-
-@dataclass(frozen=True)
-class Label:
-    action: str  # "done" | "redo" | "skip" | "stop"
-    success: bool = False
-    progress: float | None = None
-
-
 class OperatorConsole:
-    """`bench`: a calibrated camera that shows each target and checks the staging (staging.check.Bench)."""
+    """The operator interface (base.Operator) answered by a person. `bench`: a calibrated camera that shows each
+    target and checks the staging (staging.check.Bench); `channel`: where each prompt is also written as JSON."""
 
-    def __init__(self, answers: Answers, console: Console | None = None, unit: str = "m", bench: Any = None) -> None:
+    def __init__(
+        self,
+        answers: Answers,
+        console: Console | None = None,
+        unit: str = "m",
+        bench: Any = None,
+        channel: Channel | None = None,
+    ) -> None:
         self.answers = answers
         self.console = console or Console(highlight=False)
         self.unit = unit
         self.bench = bench
+        self.channel = channel
+        self._trial: dict[str, Any] = {}  # the trial being staged, as the channel names it
+
+    def _send(self, **message: Any) -> None:
+        if self.channel is not None:
+            self.channel.send(**message)
+
+    def say(self, text: str) -> None:
+        self.console.print(text)
+
+    def take_key(self) -> str | None:
+        return self.answers.take_key()
 
     def stage(self, context: TrialContext) -> Staging:
         """Show what to move for this trial and time the operator from the prompt to "ready"."""
-        self._show_trial(context)
+        moves = self._show_trial(context)
+        self._trial = {"trial": context.index, "instruction": context.instance.instruction}
         start = time.monotonic()
         while True:
             self.console.print(
                 "[bold]Enter[/] when staged · [bold]c METRES[/] if you moved things differently · "
                 "[bold]k[/] skip trial · [bold]q[/] stop session"
             )
+            self._send(prompt="stage", of=context.planned_trials, moves=moves, **self._trial)
             answer = self.answers.next()
             if answer in ("", "ready", "y"):
                 return Staging("ready", time.monotonic() - start)
@@ -113,7 +118,8 @@ class OperatorConsole:
                 return Staging("ready", time.monotonic() - start, moved)
             self.console.print(f"[red]not understood: {answer!r}[/]")
 
-    def _show_trial(self, context: TrialContext) -> None:
+    def _show_trial(self, context: TrialContext) -> dict[str, list[float] | None]:
+        """Print what to move; returns each object to move and its target (None: off the workspace)."""
         instance = context.instance
         axis = f" ({AXIS_MEANING[context.axis]})" if context.axis else ""
         self.console.rule(
@@ -135,6 +141,7 @@ class OperatorConsole:
         if not moves:
             self.console.print("nothing to move")
         self.console.print(f"planned cost: {context.planned_cost:.2f} {self.unit}")
+        return {move.name: None if move.end is None else [move.end.x, move.end.y] for move in moves}
 
     def fix_or_accept(self, off: Mapping[str, float | None], tolerance: float) -> str:
         """Say which checked objects the camera found off target; "fix" (measure again), "accept" or "stop"."""
@@ -147,6 +154,7 @@ class OperatorConsole:
             self.console.print(
                 "[bold]Enter[/] after fixing them to measure again · [bold]a[/] accept as placed · [bold]q[/] stop session"
             )
+            self._send(prompt="check", off=dict(off), tolerance=tolerance)
             answer = self.answers.next().lower()
             if answer in ("", "a", "q"):
                 return {"": "fix", "a": "accept", "q": "stop"}[answer]
@@ -154,16 +162,18 @@ class OperatorConsole:
 
     def running(self) -> None:
         self.console.print("running · [bold]s[/] success · [bold]f[/] failure · [bold]e[/] EMERGENCY STOP (then Enter)")
+        self._send(event="running")
 
     def aborted(self, reason: str) -> Label:
         self.console.print(f"[bold red]trial aborted: {reason}[/]")
         self.console.print("[bold]Enter[/] to continue with the next trial · [bold]q[/] stop session")
+        self._send(prompt="aborted", reason=reason)
         while True:
             answer = self.answers.next()
             if answer in ("", "q"):
                 return Label("stop" if answer == "q" else "done")
 
-    def label(self, subgoals: list[str], suggestion: Judgement | None, early: str | None) -> Label:
+    def label(self, subgoals: Sequence[str], suggestion: Judgement | None, early: str | None) -> Label:
         """Ask how the trial went: success/failure, or how many subgoals were reached, in order."""
         if early is not None and not subgoals:
             return Label("done", success=early == "success", progress=float(early == "success"))
@@ -174,6 +184,7 @@ class OperatorConsole:
                 f"outcome? {choices} · [bold]p FRACTION[/] progress · [bold]r[/] redo · [bold]k[/] skip · "
                 f"[bold]q[/] stop (this trial is not recorded){default[1]}"
             )
+            self._send(prompt="label", subgoals=list(subgoals), **self._trial)
             answer = self.answers.next().lower()
             if answer == "" and default[0] is not None:
                 return default[0]
@@ -197,7 +208,7 @@ def _parse_label(answer: str, n_subgoals: int) -> Label | None:
     return None
 
 
-def _suggested(suggestion: Judgement | None, subgoals: list[str]) -> tuple[Label | None, str]:
+def _suggested(suggestion: Judgement | None, subgoals: Sequence[str]) -> tuple[Label | None, str]:
     if suggestion is None:
         return None, ""
     progress = suggestion.progress if suggestion.progress is not None else float(suggestion.success)

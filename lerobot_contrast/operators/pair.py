@@ -7,7 +7,8 @@ from __future__ import annotations
 from typing import Any
 
 from lerobot_contrast.contrast.trial import TrialContext
-from lerobot_contrast.operator_console import Label, OperatorConsole, Staging
+from lerobot_contrast.operators.base import Label, Staging
+from lerobot_contrast.operators.console import OperatorConsole
 
 
 class PairConsole:
@@ -21,7 +22,7 @@ class PairConsole:
         return getattr(self.console, name)
 
     def _say(self, text: str) -> None:
-        self.console.console.print(text)
+        self.console.say(text)
 
     def stage(self, context: TrialContext) -> Staging:
         turn = f"policy {self.session.position + 1} of {len(self.session.order)}"

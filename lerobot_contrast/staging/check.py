@@ -91,7 +91,7 @@ class Bench:
             self._remember(context.index, before, placed)
             self.show(robot, placed, target, off, None, image)
             if not any(d is None or d > 0 for d in off.values()):
-                console.console.print(f"staging check: {len(off)} coloured objects within {self.tolerance * 100:g} cm")
+                console.say(f"staging check: {len(off)} coloured objects within {self.tolerance * 100:g} cm")
                 return self._measured(context, staging, before, placed, off, started)
             answer = console.fix_or_accept(off, self.tolerance)
             if answer == "accept":

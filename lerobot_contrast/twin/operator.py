@@ -1,6 +1,7 @@
 """The scripted operator of the twin: runs `python -m lerobot_contrast.eval ... --operator=console` as a child, reads
-what the console says to move where, places each object through the twin's placement socket (with a chosen error),
-presses Enter, and labels each trial from the twin's true scene with the task's own goal check.
+from the console's structured channel what to move where, places each object through the twin's placement socket
+(with a chosen error), presses Enter, and labels each trial from the twin's true scene with the task's own goal
+check. A person typing at this terminal takes over the console's answers from then on.
 
     python -m lerobot_contrast.twin.operator [--placement=tcp://127.0.0.1:5556] [--placement_error=normal:0.005]
         [--seed=0] [--on_flagged=accept|fix] EVAL_FLAGS...
@@ -8,10 +9,6 @@ presses Enter, and labels each trial from the twin's true scene with the task's 
 
 from __future__ import annotations
 
-import argparse
-import os
-import re
-import subprocess
 import sys
 import time
 from collections.abc import Collection, Sequence
@@ -21,7 +18,9 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Scene
-from lerobot_contrast.twin.fates import ENDED, TRIAL
+from lerobot_contrast.flags import ScriptParser
+from lerobot_contrast.twin.console_session import run_answered
+from lerobot_contrast.twin.fates import ENDED
 from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient
 
 # After placing, wait as a person's hands leave the table: the camera's latest frame is up to a few frames old, and
@@ -29,11 +28,6 @@ from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementCli
 SETTLE_S = 0.5
 STRAY_M = 0.01  # an object this far from where the trial starts it was moved: put it back
 LIFTED_M = 0.02  # an object this far above where it rested when staged is held, not put down
-WHERE = r"\((?:off the workspace|[+-]\d+\.\d+, [+-]\d+\.\d+)\)"
-MOVE = re.compile(rf"^\W*(\w+)\s*[│|]\s*({WHERE})\s*[│|]\s*({WHERE})\s*[│|]")
-OFF = re.compile(r"^\W*(\w+)\s*[│|]\s*(?:not seen|\d+\.\d+ cm off)")
-STAGED_PROMPT, CHECK_PROMPT = "Enter when staged", "Enter after fixing them"
-OUTCOME_PROMPT, ABORTED_PROMPT = "outcome? ", "Enter to continue with the next trial"
 
 
 class OperatorError(Exception):
@@ -66,11 +60,6 @@ class PlacementError:
             angle = rng.uniform(0, 2 * np.pi)
             return self.size * np.cos(angle), self.size * np.sin(angle)
         return 0.0, 0.0
-
-
-def _pose(text: str) -> tuple[float, float] | None:
-    numbers = re.findall(r"[+-]\d+\.\d+", text)
-    return (float(numbers[0]), float(numbers[1])) if numbers else None
 
 
 class Plan:
@@ -106,62 +95,60 @@ class Plan:
 
 
 class Operator:
-    """Answers one eval's console: `answer` writes a line to its input, as a person pressing keys does."""
+    """Answers one eval's console from its structured channel: `handle` takes one prompt and returns the line to
+    type, as a person pressing keys does."""
 
     def __init__(self, plan: Plan, placement: PlacementClient, error: PlacementError, seed: int, on_flagged: str):
         self.plan, self.placement, self.error, self.on_flagged = plan, placement, error, on_flagged
         self.rng = np.random.default_rng(seed)
         self.index, self.instruction = 0, ""
         self.moves: dict[str, tuple[float, float] | None] = {}  # object -> target (None: off the workspace)
-        self.flagged: list[str] = []
         self.fixes = 0
         self.placed: list[dict] = []  # every placement made: object, target, where it was put
         self.resting: dict[str, float] = {}  # each object's height as staged, resting on the table
         self.said: list[str] = []  # what the operator reports beside its answers
 
-    def read(self, line: str) -> str | None:
-        """Take one line of the console's output; returns what to type (a line) when it is a prompt."""
-        if found := TRIAL.search(line):
-            self.index, self.moves, self.fixes = int(found.group(1)) - 1, {}, 0
-        elif line.startswith("instruction: "):
-            self.instruction = line.removeprefix("instruction: ").strip()
-        elif found := MOVE.match(line):
-            self.moves[found.group(1)] = _pose(found.group(3))
-            self.flagged = []
-        elif found := OFF.match(line):
-            self.flagged.append(found.group(1))
-        elif STAGED_PROMPT in line:
-            before = self.placement.scene()
-            strays = self._strays(before)
-            self._place({**self.moves, **strays})
-            after, self.resting = self.placement.look()
-            moved = {name: pose.distance_to(after.objects[name]) for name, pose in before.objects.items()}
-            each = ", ".join(f"{name} {distance:.3f}" for name, distance in moved.items() if distance > 0.001)
-            self.said.append(f"moved {sum(moved.values()):.3f} m (the twin's truth: {each})")
-            if strays:  # as a person who put back what the robot moved says so: what was moved, all told
-                self.said.append(f"put back {', '.join(strays)}, which the console said to leave")
-                return f"c {sum(moved.values()):.3f}"
-            return ""
-        elif CHECK_PROMPT in line:
+    def handle(self, message: dict) -> str | None:
+        """One message of the console's channel; returns what to type (a line) when it is a prompt."""
+        prompt = message.get("prompt")
+        if prompt == "stage":
+            self.index, self.instruction, self.fixes = message["trial"], message["instruction"], 0
+            self.moves = {name: None if to is None else (to[0], to[1]) for name, to in message["moves"].items()}
+            return self._stage()
+        if prompt == "check":
+            flagged = [name for name, off in message["off"].items() if off is None or off > 0]
             if self.on_flagged == "fix" and self.fixes < 2:
                 self.fixes += 1
-                self._place({name: self.moves.get(name) for name in self.flagged if name in self.moves})
-                self.flagged = []
+                self._place({name: self.moves[name] for name in flagged if name in self.moves})
                 return ""
-            self.flagged = []
             return "a"
-        elif OUTCOME_PROMPT in line:
-            scene, heights = self.placement.look()
-            lifted = {name: z - self.resting[name] for name, z in heights.items()
-                      if name in self.resting and z - self.resting[name] > LIFTED_M}  # fmt: skip
-            where = ", ".join(f"{name} ({pose.x:.3f}, {pose.y:.3f})" for name, pose in scene.objects.items())
-            self.said.append(f"{ENDED}{where}")
-            for name, up in lifted.items():
-                self.said.append(f"{name} is held {up * 100:.1f} cm up, not put down")
-            return "y" if self.plan.judge(self.index, self.instruction, scene, lifted) else "n"
-        elif ABORTED_PROMPT in line:
-            return ""
-        return None
+        if prompt == "label":
+            self.index, self.instruction = message["trial"], message["instruction"]
+            return self._label()
+        return "" if prompt == "aborted" else None
+
+    def _stage(self) -> str:
+        before = self.placement.scene()
+        strays = self._strays(before)
+        self._place({**self.moves, **strays})
+        after, self.resting = self.placement.look()
+        moved = {name: pose.distance_to(after.objects[name]) for name, pose in before.objects.items()}
+        each = ", ".join(f"{name} {distance:.3f}" for name, distance in moved.items() if distance > 0.001)
+        self.said.append(f"moved {sum(moved.values()):.3f} m (the twin's truth: {each})")
+        if strays:  # as a person who put back what the robot moved says so: what was moved, all told
+            self.said.append(f"put back {', '.join(strays)}, which the console said to leave")
+            return f"c {sum(moved.values()):.3f}"
+        return ""
+
+    def _label(self) -> str:
+        scene, heights = self.placement.look()
+        lifted = {name: z - self.resting[name] for name, z in heights.items()
+                  if name in self.resting and z - self.resting[name] > LIFTED_M}  # fmt: skip
+        where = ", ".join(f"{name} ({pose.x:.3f}, {pose.y:.3f})" for name, pose in scene.objects.items())
+        self.said.append(f"{ENDED}{where}")
+        for name, up in lifted.items():
+            self.said.append(f"{name} is held {up * 100:.1f} cm up, not put down")
+        return "y" if self.plan.judge(self.index, self.instruction, scene, lifted) else "n"
 
     def _strays(self, seen: Scene) -> dict[str, tuple[float, float]]:
         """Objects the console says to leave that are not where the trial starts them (the robot moved them in the
@@ -189,37 +176,8 @@ class Operator:
             time.sleep(SETTLE_S)
 
 
-def run_eval(eval_argv: Sequence[str], operator: Operator) -> int:
-    """Run the eval with the console answered by `operator`, echoing what it prints; returns its exit code."""
-    # Wide lines keep the console's tables on one line each; unbuffered output shows each prompt when printed.
-    env = {**os.environ, "COLUMNS": "200", "PYTHONUNBUFFERED": "1"}
-    command = [sys.executable, "-m", "lerobot_contrast.eval", *eval_argv, "--operator=console"]
-    with subprocess.Popen(
-        command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
-    ) as child:
-        try:
-            for line in child.stdout:
-                print(line, end="", flush=True)
-                typed = operator.read(line.rstrip("\n"))
-                for said in operator.said:
-                    print(f"[operator] {said}", flush=True)
-                operator.said.clear()
-                if typed is not None:
-                    print(f"[operator] {typed or 'Enter'}", flush=True)
-                    child.stdin.write(typed + "\n")
-                    child.stdin.flush()
-        except (OperatorError, UserError):
-            child.stdin.write("q\n")  # stop the session where it is: the run stays resumable
-            child.stdin.close()
-            child.wait()
-            raise
-        except (BrokenPipeError, KeyboardInterrupt):
-            pass
-        return child.wait()
-
-
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m lerobot_contrast.twin.operator", description=__doc__)
+    parser = ScriptParser(prog="python -m lerobot_contrast.twin.operator", description=__doc__.splitlines()[0])
     parser.add_argument("--placement", default=DEFAULT_ADDRESS, help="the twin's placement socket")
     parser.add_argument("--placement_error", default="none", help="none, normal:SIGMA or offset:D (metres)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the placement errors")
@@ -229,7 +187,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         error = PlacementError.parse(known.placement_error)
         operator = Operator(Plan(eval_argv), PlacementClient(known.placement), error, known.seed, known.on_flagged)
-        return run_eval(eval_argv, operator)
+        return run_answered(eval_argv, operator, (OperatorError,))
     except (OperatorError, UserError) as failure:
         print(f"error: {failure}", file=sys.stderr)
         return 2

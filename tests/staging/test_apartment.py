@@ -13,7 +13,7 @@ from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.domains.vln.apartment.furniture import furniture_for
 from lerobot_contrast.domains.vln.apartment.geometry import Room
-from lerobot_contrast.operator_console import Answers, OperatorConsole
+from lerobot_contrast.operators.console import Answers, OperatorConsole
 from lerobot_contrast.staging.apartment import MapBench, map_frame, map_marks
 
 

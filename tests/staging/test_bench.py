@@ -22,7 +22,8 @@ from lerobot_contrast.domains.task_file.loader import load_task_file
 from lerobot_contrast.eval import equipped, planned_evaluation
 from lerobot_contrast.evaluation import run
 from lerobot_contrast.flags import parse_config
-from lerobot_contrast.operator_console import Answers, OperatorConsole, SessionStopped
+from lerobot_contrast.operators.base import SessionStopped
+from lerobot_contrast.operators.console import Answers, OperatorConsole
 from lerobot_contrast.policies import make_policy
 from lerobot_contrast.staging import homography, locate, overlay
 from lerobot_contrast.staging.check import MEMORY, Bench

@@ -131,17 +131,12 @@ class FakePlacement:
         return self.scene(), dict(self.z)
 
 
-CONSOLE = """\
-───── trial 1/3 · so101_blocks-0000 · original ─────
-instruction: put the red cube next to the green cube
-│ green_cube │ (+0.300, +0.350) │ (+0.320, -0.041) │ 0.392        │
-│ red_cube   │ (+0.150, +0.350) │ (+0.269, +0.057) │ 0.316        │
-planned cost: 0.99 m
-Enter when staged · c METRES if you moved things differently · k skip trial · q stop session
-│ red_cube │ 4.1 cm off │
-Enter after fixing them to measure again · a accept as placed · q stop session
-running · s success · f failure · e EMERGENCY STOP (then Enter)
-outcome? y success · n failure · p FRACTION progress · r redo · k skip · q stop (this trial is not recorded)"""
+INSTRUCTION = "put the red cube next to the green cube"
+STAGE = {"prompt": "stage", "trial": 0, "of": 3, "instruction": INSTRUCTION,
+         "moves": {"green_cube": [0.320, -0.041], "red_cube": [0.269, 0.057]}}  # fmt: skip
+CHECK = {"prompt": "check", "off": {"red_cube": 0.041, "green_cube": 0.0}, "tolerance": 0.02}
+LABEL = {"prompt": "label", "trial": 0, "instruction": INSTRUCTION, "subgoals": []}
+CHANNEL = [STAGE, CHECK, {"event": "running"}, LABEL]  # what the console's channel says of one trial
 
 
 @pytest.mark.parametrize(("red", "label"), [((0.30, -0.02), "y"), ((0.20, 0.20), "n")])
@@ -150,7 +145,7 @@ def test_the_operator_places_what_the_console_says_and_labels_from_the_true_scen
     truth = Scene({"red_cube": Pose(*red), "green_cube": Pose(0.32, -0.041), "blue_cube": Pose(0.39, 0.07)})
     placement = FakePlacement(truth)
     scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="fix")
-    typed = [answer for line in CONSOLE.splitlines() if (answer := scripted.read(line)) is not None]
+    typed = [answer for message in CHANNEL if (answer := scripted.handle(message)) is not None]
     assert typed == ["", "", label]  # staged, the flagged cube placed again, the label the scene shows
     assert placement.placed == {"green_cube": (0.320, -0.041), "red_cube": (0.269, 0.057)}
 
@@ -169,14 +164,8 @@ def test_what_the_robot_moved_and_the_console_says_to_leave_is_put_back_and_repo
     in_bin = Pose(0.30, 0.18)  # where the base's trial left the red cube: no camera told the console
     placement = MovingPlacement(Scene({**start, "red_cube": in_bin}))
     scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="accept")
-    console = [
-        "───── trial 2/3 · so101_blocks-0000 · ΔL (new wording, same behaviour) ─────",
-        f"instruction: {plan.instances[1].instruction}",
-        "leave as they are: blue_cube, green_cube, red_cube",
-        "nothing to move",
-        "Enter when staged · c METRES if you moved things differently · k skip trial · q stop session",
-    ]
-    typed = [answer for line in console if (answer := scripted.read(line)) is not None]
+    stage = {"prompt": "stage", "trial": 1, "of": 3, "instruction": plan.instances[1].instruction, "moves": {}}
+    typed = [scripted.handle(stage)]
     back = start["red_cube"]
     assert placement.placed == {"red_cube": pytest.approx((back.x, back.y))}
     assert typed == [f"c {in_bin.distance_to(back):.3f}"]  # the metres moved, as a person types them
@@ -187,18 +176,17 @@ def test_a_cube_still_held_over_its_goal_when_the_episode_ends_is_a_failure():
     start = plan.instances[0].scene.objects
     placement = FakePlacement(Scene(dict(start)))
     scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="accept")
-    console = CONSOLE.replace("│ red_cube │ 4.1 cm off │\n", "").splitlines()
-    typed = [answer for line in console[:-1] if (answer := scripted.read(line)) is not None]
+    typed = [scripted.handle(message) for message in (STAGE, CHECK)]
     assert typed == ["", "a"]  # staged, and what the camera flagged accepted
     green = start["green_cube"]  # the goal holds by x and y: the red cube hangs right beside the green one
     placement.reported = Scene({**start, "red_cube": Pose(green.x + 0.04, green.y)})
     placement.z["red_cube"] += 0.06  # ... in the gripper, 6 cm up
-    assert scripted.read(console[-1]) == "n"
+    assert scripted.handle(LABEL) == "n"
     assert scripted.said[-1] == "red_cube is held 6.0 cm up, not put down"
     ended = next(line for line in scripted.said if line.startswith("the trial ended with "))
     assert f"red_cube ({green.x + 0.04:.3f}, {green.y:.3f})" in ended  # where each object is, for the study's log
     placement.z["red_cube"] -= 0.06  # let go: now it rests there
-    assert scripted.read(console[-1]) == "y"
+    assert scripted.handle(LABEL) == "y"
 
 
 def test_the_operators_bad_input_is_one_line():
