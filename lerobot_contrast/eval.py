@@ -7,16 +7,19 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from lerobot_contrast.build import (
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.stopping import summary_line
+from lerobot_contrast.lanes.choice import use_threads
+from lerobot_contrast.policies import make_policy
+from lerobot_contrast.record.journal import read_journal
+from lerobot_contrast.run.build import (
     check_robot_type,
     make_operator,
     make_robot,
     register_robots,
 )
-from lerobot_contrast.config import EvalConfig, resume_args
-from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.contrast.stopping import summary_line
-from lerobot_contrast.flags import (
+from lerobot_contrast.run.config import EvalConfig, resume_args
+from lerobot_contrast.run.flags import (
     bool_flags,
     check_names,
     flag_names,
@@ -26,11 +29,7 @@ from lerobot_contrast.flags import (
     robot_type,
     wants_help,
 )
-from lerobot_contrast.lane_choice import use_threads
-from lerobot_contrast.policies import make_policy
-from lerobot_contrast.progress import RunProgress, header_lines
-from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.run_setup import (
+from lerobot_contrast.run.run_setup import (
     check_new_run_dir,
     connect,
     default_output_dir,
@@ -38,16 +37,17 @@ from lerobot_contrast.run_setup import (
     equipped,
     planned_evaluation,
 )
+from lerobot_contrast.terminal.progress import RunProgress, header_lines
 
 if TYPE_CHECKING:
-    from lerobot_contrast.evaluation import Evaluation
+    from lerobot_contrast.run.evaluation import Evaluation
 
 
 def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
     """Plan, then either print the plan (--dry_run) or run it into a run directory; returns the exit code.
     `chosen_robot`: the --robot.type as given, for messages."""
     if cfg.policies is not None:
-        from lerobot_contrast.interleaved_run import run_policies
+        from lerobot_contrast.pairing.session import run_policies
 
         return run_policies(cfg, chosen_robot)
     planned = planned_evaluation(cfg)
@@ -68,7 +68,7 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
         return run_and_report(cfg, equipped(cfg, planned, robot, policy, operator))
     finally:
         if robot.is_connected:
-            from lerobot_contrast.runner import release
+            from lerobot_contrast.run.runner import release
 
             # A lost robot cannot disconnect cleanly (its servos do not answer): one line after the error, no traceback.
             failed = release(robot)
@@ -80,8 +80,8 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
 
 
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
-    from lerobot_contrast.evaluation import run
-    from lerobot_contrast.run_end import ENDED_EARLY, say_ended_early
+    from lerobot_contrast.run.evaluation import run
+    from lerobot_contrast.run.run_end import ENDED_EARLY, say_ended_early
 
     path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
     resume = f"--output_dir={path} --resume=true"

@@ -11,14 +11,14 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_contrast import interleaved_run as command
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.eval import main
+from lerobot_contrast.pairing import session as command
 from lerobot_contrast.publish import main as publish
 from lerobot_contrast.report import main as report
 from lerobot_contrast.review import main as review
-from lerobot_contrast.runner import RobotRunner
+from lerobot_contrast.run.runner import RobotRunner
 
 SMALL = ["--n_instances=2", "--seed=5", "--perturbations=SB1", "--max_episode_steps=40", "--rerun=false"]
 TWO_ORACLES = "oracle,oracle:noise_std=0.02"

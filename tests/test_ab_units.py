@@ -8,13 +8,13 @@ import json
 
 import pytest
 
-from lerobot_contrast.config import EvalConfig, config_json
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
 from lerobot_contrast.eval import main, planned_evaluation
-from lerobot_contrast.interleave import Interleaver, Seat, policy_order
 from lerobot_contrast.pairing.decide import PairMonitor
+from lerobot_contrast.pairing.interleave import Interleaver, Seat, policy_order
+from lerobot_contrast.pairing.policy_list import parse_policies
 from lerobot_contrast.policies.base import PolicyArgs
-from lerobot_contrast.policy_list import parse_policies
+from lerobot_contrast.run.config import EvalConfig, config_json
 
 
 def test_each_entry_names_a_policy_with_its_own_options():

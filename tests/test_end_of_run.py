@@ -11,9 +11,9 @@ import pytest
 from rich.console import Console
 
 from lerobot_contrast.eval import main
-from lerobot_contrast.progress import RunProgress
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.reporting import analysis, stats
+from lerobot_contrast.terminal.progress import RunProgress
 
 SMALL = ["--n_instances=3", "--seed=5", "--policy.type=oracle", "--policy.noise_std=0.005", "--rerun=false"]
 

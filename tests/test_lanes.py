@@ -9,18 +9,18 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_contrast import lane_runner
-from lerobot_contrast.build import make_robot, register_robots
-from lerobot_contrast.config import EvalConfig, StopArgs
 from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
 from lerobot_contrast.eval import planned_evaluation
-from lerobot_contrast.evaluation import run
-from lerobot_contrast.lane_choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
-from lerobot_contrast.lane_runner import LaneRunner, chains
-from lerobot_contrast.lane_seats import batches_lanes
+from lerobot_contrast.lanes import runner as lane_runner
+from lerobot_contrast.lanes.choice import AUTO_LANES, LanesError, choose_lanes, parse_lanes
+from lerobot_contrast.lanes.runner import LaneRunner, chains
+from lerobot_contrast.lanes.seats import batches_lanes
 from lerobot_contrast.policies import PolicyArgs, make_policy
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
-from lerobot_contrast.runner import RobotLostError
+from lerobot_contrast.run.build import make_robot, register_robots
+from lerobot_contrast.run.config import EvalConfig, StopArgs
+from lerobot_contrast.run.evaluation import run
+from lerobot_contrast.run.runner import RobotLostError
 
 WALL_CLOCK = ("started_at", "duration_s")
 register_robots()

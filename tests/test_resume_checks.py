@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_contrast.config import EvalConfig
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.eval import planned_evaluation
-from lerobot_contrast.evaluation import assume_unchanged, run
+from lerobot_contrast.run.config import EvalConfig
+from lerobot_contrast.run.evaluation import assume_unchanged, run
 
 
 def evaluate(output_dir: Path, seed: int = 3, resume: bool = False, **settings):

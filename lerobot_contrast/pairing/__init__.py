@@ -1,2 +1,2 @@
-"""Interleaved comparisons' records (`--policies=A,B[,C]`): the pair directory, the per-pair sequential decisions, the
-combined comparison and publishing. The session itself runs in `interleaved_run.py`, beside the single-policy loop."""
+"""Several policies on one bench (`--policies=A,B[,C]`): the policy list, the interleaved session and its trial loop,
+and its records: the pair directory, the per-pair sequential decisions, the combined comparison and publishing."""

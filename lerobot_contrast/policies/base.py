@@ -54,8 +54,7 @@ class PolicyArgs:
     # Gaussian noise added to each action of the oracle or a LeRobot policy (the learned default included), in
     # the action's units: metres on the simulated tabletop (0 = none). It makes a noisier copy of a policy.
     noise_std: float = 0.0
-    # Settings of a registered policy of its own, by name, e.g. --policy.options='{placement: tcp://127.0.0.1:5557}'
-    # for so101_demonstrator (the twin's placement socket, as `python -m lerobot_contrast.twin` prints it).
+    # A registered policy's own settings, e.g. so101_demonstrator's '{placement: ADDRESS the twin printed}'.
     options: dict[str, str] = field(default_factory=dict)
     # Probability per episode that the oracle ignores a perturbed instruction's words and executes
     # its base instruction instead (0 = reads every instruction).

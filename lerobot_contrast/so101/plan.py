@@ -17,7 +17,7 @@ from lerobot_contrast.domains.task_file import FileTask, TaskSpec
 from lerobot_contrast.domains.task_file.goals import compose
 from lerobot_contrast.domains.task_file.world import sample_scene
 from lerobot_contrast.so101 import arm, reach
-from lerobot_contrast.twin.scene import build_spec, is_bin, object_sizes
+from lerobot_contrast.so101.scene import build_spec, is_bin, object_sizes
 
 NEAR_GAP = 0.012  # m between the faces of an object put next to another: room for where it lands, within the goal
 BIN_INSETS = (0.0, 0.015, 0.03)  # m towards the arm from a bin's middle, tried in turn when the middle is unreachable

@@ -14,17 +14,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from lerobot_contrast.build import make_robot, register_robots
-from lerobot_contrast.config import EvalConfig, config_json
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.eval import connect, equipped, planned_evaluation
-from lerobot_contrast.evaluation import run
 from lerobot_contrast.policies import PRETRAINED_BUILD, Policy, make_policy, policy_entry
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.shared_episodes import FOLDER, SharedEpisodes, weights_digest
 from lerobot_contrast.record.sweep_dir import is_complete
+from lerobot_contrast.run.build import make_robot, register_robots
+from lerobot_contrast.run.config import EvalConfig, config_json
+from lerobot_contrast.run.evaluation import run
 from lerobot_contrast.sweep.carry import Carry, local_run_dir, pack
 from lerobot_contrast.sweep.cells import policy_shares_episodes
 

@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from lerobot_contrast.contrast.instance import Instance
-from lerobot_contrast.lane_choice import AUTO_LANES as LANES
+from lerobot_contrast.lanes.choice import AUTO_LANES as LANES
 from lerobot_contrast.training.episodes import Simulator, side_by_side
 
 

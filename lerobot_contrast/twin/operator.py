@@ -18,7 +18,7 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Scene
-from lerobot_contrast.flags import ScriptParser
+from lerobot_contrast.run.flags import ScriptParser
 from lerobot_contrast.twin.console_session import run_answered
 from lerobot_contrast.twin.fates import ENDED
 from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient
@@ -66,12 +66,12 @@ class Plan:
     """The run's trials as the evaluator plans them, to know each trial's goal (read from the same flags)."""
 
     def __init__(self, eval_argv: Sequence[str]):
-        from lerobot_contrast.build import check_robot_type, register_robots
-        from lerobot_contrast.config import EvalConfig, resume_args
-        from lerobot_contrast.evaluation import preview
-        from lerobot_contrast.flags import bool_flags, join_values, parse_config
-        from lerobot_contrast.run_setup import planned_evaluation
-        from lerobot_contrast.twin.scene import start_poses
+        from lerobot_contrast.run.build import check_robot_type, register_robots
+        from lerobot_contrast.run.config import EvalConfig, resume_args
+        from lerobot_contrast.run.evaluation import preview
+        from lerobot_contrast.run.flags import bool_flags, join_values, parse_config
+        from lerobot_contrast.run.run_setup import planned_evaluation
+        from lerobot_contrast.so101.scene import start_poses
 
         argv = join_values(list(eval_argv), bool_flags(EvalConfig))
         check_robot_type(argv, register_robots())

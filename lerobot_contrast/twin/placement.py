@@ -22,9 +22,9 @@ import zmq
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file.schema import TaskSpec
+from lerobot_contrast.so101.scene import object_sizes, start_poses, table_extent
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement_client import DEFAULT_PORT, HOST
-from lerobot_contrast.twin.scene import object_sizes, start_poses, table_extent
 
 COMMANDS = ("place", "scene", "board", "remove_board", "reset_arm")
 POLL_MS = 100  # how often the serving thread looks up to see whether it should stop

@@ -62,9 +62,9 @@ class Twin:
 
     def __init__(self, config: TwinConfig, camera: bool = True) -> None:
         from lerobot_contrast.so101 import arm  # MuJoCo loads here, after the caller chose its GL backend
+        from lerobot_contrast.so101.scene import build_spec
         from lerobot_contrast.twin.camera import view_hulls
         from lerobot_contrast.twin.physics import Physics
-        from lerobot_contrast.twin.scene import build_spec
         from lerobot_contrast.twin.servos import ServoBank
 
         self.config = config

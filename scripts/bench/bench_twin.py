@@ -135,8 +135,8 @@ def eval_figures(work: Path, instances: int) -> dict[str, str]:
         flags = next(shlex.split(line[12:]) for line in twin.stdout if line.startswith("eval flags: "))
         policy = save_act(work / "act")
         from lerobot_contrast.domains.task_file import load_task_file
+        from lerobot_contrast.so101.scene import start_poses
         from lerobot_contrast.twin.placement_client import PlacementClient
-        from lerobot_contrast.twin.scene import start_poses
 
         placement = PlacementClient(f"tcp://127.0.0.1:{control}")
 

@@ -26,8 +26,8 @@ def world():
     import mujoco
 
     from lerobot_contrast.domains.task_file.loader import load_task_file
+    from lerobot_contrast.so101.scene import build_spec
     from lerobot_contrast.twin.board import add_board
-    from lerobot_contrast.twin.scene import build_spec
 
     task = load_task_file("so101_blocks").spec
     model = build_spec(task, extras=[view_hulls, partial(add_board, x=0.30, y=0.0, yaw_deg=10.0)]).compile()

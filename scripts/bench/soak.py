@@ -17,13 +17,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from lerobot_contrast.build import make_robot, register_robots
-from lerobot_contrast.config import EvalConfig
 from lerobot_contrast.eval import connect, equipped, planned_evaluation
-from lerobot_contrast.evaluation import run
 from lerobot_contrast.policies import make_policy
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
+from lerobot_contrast.run.build import make_robot, register_robots
+from lerobot_contrast.run.config import EvalConfig
+from lerobot_contrast.run.evaluation import run
 
 WARM_UP = 5  # trials before the first sample: the first episodes load codecs and create the dataset
 

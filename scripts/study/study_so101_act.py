@@ -31,7 +31,7 @@ import sys
 import time
 from pathlib import Path
 
-from lerobot_contrast.flags import ScriptParser
+from lerobot_contrast.run.flags import ScriptParser
 
 POLICIES = ("act", "demonstrator", "ab")
 
@@ -140,9 +140,9 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
     from lerobot_contrast.contrast.errors import UserError
     from lerobot_contrast.domains.task_file import load_task_file
+    from lerobot_contrast.so101.scene import start_poses
     from lerobot_contrast.twin.launch import running_twin
     from lerobot_contrast.twin.placement_client import PlacementClient
-    from lerobot_contrast.twin.scene import start_poses
 
     width, height = (args.width, args.height) if args.checkpoint is None else frame_size(args.checkpoint)
     began = time.monotonic()

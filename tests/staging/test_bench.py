@@ -12,7 +12,6 @@ import rerun as rr
 from rerun.experimental import RrdReader
 from rich.console import Console
 
-from lerobot_contrast.config import EvalConfig
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.language_table import board as tabletop
 from lerobot_contrast.domains.language_table.config_language_table_sim import LanguageTableSimConfig
@@ -20,11 +19,12 @@ from lerobot_contrast.domains.language_table.language_table_sim import LanguageT
 from lerobot_contrast.domains.language_table.render import TabletopRenderer
 from lerobot_contrast.domains.task_file.loader import load_task_file
 from lerobot_contrast.eval import equipped, planned_evaluation
-from lerobot_contrast.evaluation import run
-from lerobot_contrast.flags import parse_config
 from lerobot_contrast.operators.base import SessionStopped
 from lerobot_contrast.operators.console import Answers, OperatorConsole
 from lerobot_contrast.policies import make_policy
+from lerobot_contrast.run.config import EvalConfig
+from lerobot_contrast.run.evaluation import run
+from lerobot_contrast.run.flags import parse_config
 from lerobot_contrast.staging import homography, locate, overlay
 from lerobot_contrast.staging.check import MEMORY, Bench
 from lerobot_contrast.staging.setup import geometry

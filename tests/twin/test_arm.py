@@ -13,8 +13,8 @@ from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
 
 from lerobot_contrast.domains.task_file import load_task_file
 from lerobot_contrast.so101 import arm
+from lerobot_contrast.so101.scene import build_spec
 from lerobot_contrast.twin.physics import Physics
-from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
 
 REPO = Path(__file__).resolve().parents[2]

@@ -16,9 +16,9 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import load_task_file
 from lerobot_contrast.ports import free_port
 from lerobot_contrast.so101 import arm, plan
+from lerobot_contrast.so101.scene import build_spec
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement import PlacementServer
-from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
 
 INSTRUCTION = "put the red cube in the left bin"
@@ -142,9 +142,9 @@ def test_the_recording_script_answers_a_bad_instruction_in_one_line(tmp_path):
 
 def test_as_an_evaluator_policy_it_carries_out_each_trials_goal_on_the_true_scene(placement, monkeypatch):
     from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
-    from lerobot_contrast.twin import demonstrator as policy_module
 
     from lerobot_contrast import PolicyArgs, TrialContext, make_policy
+    from lerobot_contrast.twin import demonstrator as policy_module
 
     clock = [50.0]
     monkeypatch.setattr(policy_module.time, "monotonic", lambda: clock[0])

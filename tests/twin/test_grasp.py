@@ -8,8 +8,8 @@ import pytest
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.task_file import load_task_file
 from lerobot_contrast.so101 import arm, reach
+from lerobot_contrast.so101.scene import build_spec
 from lerobot_contrast.twin.physics import Physics
-from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
 
 

@@ -11,8 +11,8 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.task_file import load_task_file, task_from_dict
 from lerobot_contrast.so101 import arm
+from lerobot_contrast.so101.scene import COLOURS, build_spec, table_extent
 from lerobot_contrast.twin.physics import Physics
-from lerobot_contrast.twin.scene import COLOURS, build_spec, table_extent
 from lerobot_contrast.twin.servos import ServoBank
 
 SCENE = Scene({"red_cube": Pose(0.25, 0.05, 0.4), "green_cube": Pose(0.33, -0.06), "blue_cube": Pose(0.38, 0.07, -1.0)})

@@ -16,10 +16,10 @@ import zmq
 from lerobot_contrast.domains.task_file import load_task_file
 from lerobot_contrast.ports import free_port
 from lerobot_contrast.so101 import arm
+from lerobot_contrast.so101.scene import build_spec
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement import PlacementServer
 from lerobot_contrast.twin.placement_client import request
-from lerobot_contrast.twin.scene import build_spec
 from lerobot_contrast.twin.servos import ServoBank
 from tests.twin.test_bus import connected
 

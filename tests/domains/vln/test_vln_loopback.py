@@ -14,7 +14,7 @@ from lerobot_contrast.contrast.staging import SceneIO
 from lerobot_contrast.domains.vln import VLNTask
 from lerobot_contrast.eval import main
 from lerobot_contrast.policies.route_follower import RouteFollower
-from lerobot_contrast.runner import RobotRunner
+from lerobot_contrast.run.runner import RobotRunner
 from tests.policies.test_route_follower import context_for
 from tests.robots.locobot_helpers import FREE_PORTS, client_config
 

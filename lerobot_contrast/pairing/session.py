@@ -8,24 +8,24 @@ from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
-from lerobot_contrast.build import choose_robot, make_operator, make_robot, needs_camera
-from lerobot_contrast.config import ConfigError, EvalConfig, config_json
 from lerobot_contrast.contrast.trial import TrialRecord
-from lerobot_contrast.evaluation import Evaluation
-from lerobot_contrast.interleave import Interleaver, Seat
-from lerobot_contrast.lane_choice import use_threads
+from lerobot_contrast.lanes.choice import use_threads
 from lerobot_contrast.pairing.decide import PairMonitor
+from lerobot_contrast.pairing.interleave import Interleaver, Seat
 from lerobot_contrast.pairing.pair_dir import is_pair_dir, restaging_cost, write_index, write_summary
+from lerobot_contrast.pairing.policy_list import PolicySpec, parse_policies
 from lerobot_contrast.policies import make_policy
-from lerobot_contrast.policy_list import PolicySpec, parse_policies
 from lerobot_contrast.record.plan_file import keep_plan
 from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import RunDir, disk_full_said, open_run_dir, write_json_atomic
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.record.third_party import third_party_output
-from lerobot_contrast.run_end import ENDED_EARLY, say_ended_early
-from lerobot_contrast.run_setup import connect, default_output_dir, dry_run, equipped, planned_evaluation, validate
-from lerobot_contrast.runner import RobotRunner
+from lerobot_contrast.run.build import choose_robot, make_operator, make_robot, needs_camera
+from lerobot_contrast.run.config import ConfigError, EvalConfig, config_json
+from lerobot_contrast.run.evaluation import Evaluation
+from lerobot_contrast.run.run_end import ENDED_EARLY, say_ended_early
+from lerobot_contrast.run.run_setup import connect, default_output_dir, dry_run, equipped, planned_evaluation, validate
+from lerobot_contrast.run.runner import RobotRunner
 
 
 def check_pair_flags(cfg: EvalConfig) -> list[PolicySpec]:
@@ -127,7 +127,7 @@ class Session:
         return run_dir
 
     def _seat(self, spec: PolicySpec, ev: Evaluation, run_dir: RunDir) -> Seat:
-        from lerobot_contrast.pair_console import PairConsole
+        from lerobot_contrast.operators.pair import PairConsole
 
         operator = None if ev.operator is None else PairConsole(ev.operator, spec.label, self.cfg.blind)
         runner = RobotRunner(

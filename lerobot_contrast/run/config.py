@@ -9,8 +9,8 @@ from typing import TYPE_CHECKING, Any
 
 import draccus
 
-from lerobot_contrast.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.policies.base import PolicyArgs
+from lerobot_contrast.run.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.staging.args import StagingArgs
 
 

@@ -9,7 +9,7 @@ from contextlib import suppress
 from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.lane_seats import batches_lanes
+from lerobot_contrast.lanes.seats import batches_lanes
 
 # Lanes `--lanes=auto` runs on our simulators: scripts/bench/bench_lanes.py measures their speed and memory.
 AUTO_LANES = 8

@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from lerobot_contrast.config import ConfigError, EvalConfig
 from lerobot_contrast.contrast.staging import reports_scene
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.operators.base import Operator
@@ -16,6 +15,7 @@ from lerobot_contrast.operators.channel import Channel
 from lerobot_contrast.operators.console import Answers, OperatorConsole
 from lerobot_contrast.policies import policy_entry
 from lerobot_contrast.record.observer import EpisodeObserver
+from lerobot_contrast.run.config import ConfigError, EvalConfig
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot

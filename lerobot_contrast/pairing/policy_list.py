@@ -8,9 +8,9 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from lerobot_contrast.flags import ConfigError
 from lerobot_contrast.policies import POLICIES
 from lerobot_contrast.policies.base import PolicyArgs
+from lerobot_contrast.run.flags import ConfigError
 
 # The --policy.* options an entry may set for itself, with how their values are read.
 OPTIONS = {"noise_std": float, "language_blind": float, "device": str, "use_amp": bool}

@@ -6,8 +6,8 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 
-from lerobot_contrast.operator_console import SessionStopped
-from lerobot_contrast.runner import RobotLostError
+from lerobot_contrast.operators.base import SessionStopped
+from lerobot_contrast.run.runner import RobotLostError
 
 ENDED_EARLY = (KeyboardInterrupt, SessionStopped, RobotLostError)
 

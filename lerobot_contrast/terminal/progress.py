@@ -11,8 +11,8 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from lerobot_contrast.console import trial_line
 from lerobot_contrast.contrast.trial import TrialRecord
+from lerobot_contrast.terminal.lines import trial_line
 
 PLAIN_STEPS = 20  # plain progress lines per run, into a file or CI
 

@@ -1,5 +1,6 @@
-"""The twin's world as a `mujoco.MjSpec` built from a task file: a table, the SO-101 at the task frame's origin, each
-object a free body of its colour, shape and size, and each bin region a low-walled bin."""
+"""The bench as a `mujoco.MjSpec` built from a task file (the twin simulates it; the arm plans its reach in it): a
+table, the SO-101 at the task frame's origin, each object a free body of its colour, shape and size, and each bin
+region a low-walled bin."""
 
 from __future__ import annotations
 

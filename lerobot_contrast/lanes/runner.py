@@ -12,17 +12,16 @@ from collections import deque
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import Staged, materialize, trial_rng
 from lerobot_contrast.contrast.strategy import PlannedTrial
 from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
-from lerobot_contrast.lane_seats import PolicyFor, Seat, lane_policy
+from lerobot_contrast.lanes.seats import PolicyFor, Seat, lane_policy
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver, QuietObserver
-from lerobot_contrast.runner import RobotRunner
 
 # Trials whose staging was paid for: the scene they left behind is where the next one starts.
 STAGED = ("done", "aborted")
@@ -33,8 +32,22 @@ HELD_BYTES = 1 << 30
 
 # (trial, staged, scene the lane left) -> the trial's context as the lane runs it.
 ContextFor = Callable[[PlannedTrial, Staged, Scene], TrialContext]
+
+
+class TrialRunner(Protocol):
+    """What a lane asks of the evaluator's runner (run/runner.py's RobotRunner): one trial at a time as a generator
+    of steps, the observers watching it, and why it stopped the robot, if it did."""
+
+    observers: list[EpisodeObserver]
+
+    @property
+    def halted(self) -> Exception | None: ...
+
+    def trial(self, context: TrialContext) -> Generator[dict[str, Any], dict[str, Any], Outcome]: ...
+
+
 # (robot, policy seat, observers) -> the runner of one lane's trials.
-RunnerFor = Callable[[Any, Seat, Sequence[EpisodeObserver]], RobotRunner]
+RunnerFor = Callable[[Any, Seat, Sequence[EpisodeObserver]], TrialRunner]
 
 
 def chains(plan: Sequence[PlannedTrial]) -> list[list[PlannedTrial]]:
@@ -88,7 +101,7 @@ class Result:
 @dataclass
 class Lane:
     index: int
-    runner: RobotRunner
+    runner: TrialRunner
     tape: EpisodeTape | None
     chain: deque[PlannedTrial] = field(default_factory=deque)
     scene: Scene | None = None
