@@ -1,0 +1,101 @@
+"""The SO-101 moving itself through LeRobot's `so101_follower` alone: its joint readings, where its jaws are (forward
+kinematics on the arm's model), and slow, interpolated motions through the planner's waypoints that stop at once
+when told to. Used by the arm operator that stages trials itself; nothing here reads a simulator."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.so101 import arm, reach
+
+STEP_HZ = 30.0  # goals sent this often while moving: LeRobot's own teleoperation rate
+SETTLE_S = 0.3  # after the last goal, the servos close the rest of the way
+
+
+class Stopped(UserError):
+    """The stop key was pressed while the arm moved; it holds where it was."""
+
+
+class ArmMotion:
+    """`robot`: a connected so101_follower; `model`: the arm's MuJoCo model (for forward kinematics); `pace`: each
+    motion's time as a multiple of the planned one (larger is slower); `stop`: asked between steps, True halts."""
+
+    def __init__(self, robot: Any, model: mujoco.MjModel, pace: float, stop: Callable[[], bool]) -> None:
+        self.robot, self.model, self.pace, self.stop = robot, model, pace, stop
+        self.data = mujoco.MjData(model)
+        self.moving_s = 0.0  # seconds spent moving, all told
+
+    def joints(self) -> dict[str, float]:
+        """The arm's joint angles (radians), read from its servos."""
+        positions = self.robot.bus.sync_read("Present_Position")
+        return {name: arm.from_lerobot(name, float(positions[name])) for name in arm.MOTOR_NAMES}
+
+    def jaws(self, size: float, joints: Mapping[str, float] | None = None) -> tuple[float, float, float]:
+        """Where an object `size` wide held between the pads would be (x, y, z, metres)."""
+        joints = joints or self.joints()
+        for name in reach.ARM_JOINTS:
+            self.data.qpos[self.model.joint(name).qposadr[0]] = joints[name]
+        mujoco.mj_kinematics(self.model, self.data)
+        site = self.data.site(reach.SITE)
+        where = site.xpos + site.xmat.reshape(3, 3) @ reach.grasp_point(self.model, size)
+        return float(where[0]), float(where[1]), float(where[2])
+
+    def links(self, joints: Mapping[str, float] | None = None, per_link: int = 4) -> np.ndarray:
+        """Points (N, 3) along the arm from its base to the jaws, `per_link` on each link, for masking its image."""
+        self.jaws(0.0, joints)  # places the model at the joints
+        chain = [self.data.xpos[self.model.joint(name).bodyid[0]] for name in arm.MOTOR_NAMES]
+        chain.append(self.data.site(reach.SITE).xpos)
+        share = np.linspace(0.0, 1.0, per_link, endpoint=False)[:, None]
+        return np.concatenate([a + share * (b - a) for a, b in zip(chain, chain[1:], strict=False)] + [chain[-1][None]])
+
+    def follow(self, waypoints: Sequence[reach.Waypoint], correction: Mapping[str, float] | None = None) -> None:
+        """Move through `waypoints`, each joint interpolated from where the last goal left it; `correction` (radians
+        per joint) is added to every goal, for an arm whose calibration is off its model."""
+        correction = correction or {}
+        start = self.joints()
+        for waypoint in waypoints:
+            goal = {name: waypoint.goals.get(name, start[name]) + correction.get(name, 0.0) for name in start}
+            self._glide(start, goal, waypoint.seconds * self.pace)
+            start = goal
+        time.sleep(SETTLE_S)
+        self.moving_s += SETTLE_S
+
+    def _glide(self, start: Mapping[str, float], goal: Mapping[str, float], seconds: float) -> None:
+        steps = max(1, math.ceil(seconds * STEP_HZ))
+        for step in range(1, steps + 1):
+            if self.stop():
+                raise Stopped("the stop key was pressed while the arm was staging; it holds where it was")
+            tick = time.monotonic()
+            share = 0.5 - 0.5 * math.cos(math.pi * step / steps)  # ease in and out: no jerk at either end
+            angles = {name: start[name] + share * (goal[name] - start[name]) for name in goal}
+            self.robot.send_action(arm.lerobot_action(angles))
+            time.sleep(max(0.0, 1.0 / STEP_HZ - (time.monotonic() - tick)))
+            self.moving_s += 1.0 / STEP_HZ
+
+    def rest(self, gripper: float | None = None) -> None:
+        """Back to the rest pose, clear of the workspace and out of the camera's way; `gripper` (radians) held."""
+        goals = dict(arm.REST) if gripper is None else {**arm.REST, arm.GRIPPER: gripper}
+        self.follow([reach.Waypoint("rest", goals, 1.5)])
+
+    def open_and_withdraw(self) -> None:
+        """Let go of whatever the jaws hold, lift away from it, and go to rest (after an episode, before looking)."""
+        here = self.joints()
+        x, y, z = self.jaws(0.0, here)
+        opened = {**here, arm.GRIPPER: reach.OPEN}
+        try:
+            lifted = reach.solve(self.model, reach.grasp_point(self.model, 0.0), np.array([x, y, max(z, 0.0) + reach.HOVER]),
+                                 None, here)  # fmt: skip
+            steps = [
+                reach.Waypoint("open", opened, 0.5),
+                reach.Waypoint("lift", {**lifted, arm.GRIPPER: reach.OPEN}, 0.8),
+            ]
+        except reach.Unreachable:  # straight up is out of reach here: open and go back as it can
+            steps = [reach.Waypoint("open", opened, 0.5)]
+        self.follow([*steps, reach.Waypoint("rest", {**arm.REST, arm.GRIPPER: reach.OPEN}, 1.5)])

@@ -1,0 +1,49 @@
+"""The camera's labels near the goal's boundary: sure only where shifting the named objects by the camera's
+uncertainty keeps the verdict; a named object unseen is never guessed."""
+
+import numpy as np
+import pytest
+
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.domains import load_task
+from lerobot_contrast.operators.verdict import verdict
+from lerobot_contrast.staging.seeing import _quarter, yaw_error
+
+
+@pytest.fixture(scope="module")
+def task():
+    return load_task("so101_blocks")
+
+
+def near_instance(task):
+    instances = task.sample(40, np.random.default_rng(0))
+    return next(i for i in instances if "near" in (i.goal.get("predicate") or {}))
+
+
+@pytest.mark.parametrize(("gap", "success", "sure"), [(0.03, True, True), (0.046, True, False),
+                                                      (0.054, False, False), (0.08, False, True)])  # fmt: skip
+def test_a_cube_near_the_boundary_of_next_to_is_unsure(task, gap, success, sure):
+    instance = near_instance(task)
+    predicate = instance.goal["predicate"]
+    assert predicate["within"] == pytest.approx(0.05)
+    base = Pose(0.30, 0.0)
+    scene = Scene({**instance.scene.objects, predicate["near"]: base, predicate["subject"]: Pose(0.30 + gap, 0.0)})
+    said = verdict(task.is_achieved, instance, scene, (), (), 0.01)
+    assert (said.success, said.sure) == (success, sure)
+    assert ("boundary" in said.why) == (not sure)
+
+
+def test_an_unseen_or_held_subject_is_not_a_success(task):
+    instance = near_instance(task)
+    subject = instance.goal["predicate"]["subject"]
+    said = verdict(task.is_achieved, instance, instance.scene, (subject,), (), 0.01)
+    assert not said.sure and said.why == f"{subject} not seen"
+    base = instance.scene.objects[instance.goal["predicate"]["near"]]
+    scene = Scene({**instance.scene.objects, subject: Pose(base.x + 0.03, base.y)})
+    assert verdict(task.is_achieved, instance, scene, (), (subject,), 0.01).success is False
+
+
+def test_cube_yaw_is_compared_modulo_a_quarter_turn():
+    assert yaw_error(0.1, 0.1 + np.pi / 2) == pytest.approx(0.0, abs=1e-12)
+    assert yaw_error(np.pi / 4 - 0.01, -np.pi / 4 + 0.01) == pytest.approx(0.02)
+    assert -np.pi / 4 <= _quarter(3.0) < np.pi / 4
