@@ -28,6 +28,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         require_extra("twin", "python -m lerobot_contrast.twin")
         config = parse_config(TwinConfig, argv)
+        config.check()
         from lerobot_contrast.twin.process import Twin  # after the flags: a typo is answered before MuJoCo loads
 
         twin = Twin(config)

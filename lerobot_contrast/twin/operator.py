@@ -20,7 +20,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.run.flags import ScriptParser
 from lerobot_contrast.twin.console_session import run_answered
-from lerobot_contrast.twin.fates import ENDED
+from lerobot_contrast.twin.fates import ENDED, held_line
 from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient
 
 # After placing, wait as a person's hands leave the table: the camera's latest frame is up to a few frames old, and
@@ -147,7 +147,7 @@ class Operator:
         where = ", ".join(f"{name} ({pose.x:.3f}, {pose.y:.3f})" for name, pose in scene.objects.items())
         self.said.append(f"{ENDED}{where}")
         for name, up in lifted.items():
-            self.said.append(f"{name} is held {up * 100:.1f} cm up, not put down")
+            self.said.append(held_line(name, up))
         return "y" if self.plan.judge(self.index, self.instruction, scene, lifted) else "n"
 
     def _strays(self, seen: Scene) -> dict[str, tuple[float, float]]:

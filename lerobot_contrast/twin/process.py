@@ -46,6 +46,18 @@ class TwinConfig:
     seed: int = 0
     faults: FaultsConfig = field(default_factory=FaultsConfig)
 
+    def check(self) -> None:
+        """Raise one line for a flag no twin can start with (checked before anything binds or loads)."""
+        for flag in ("camera_port", "control_port"):
+            port = getattr(self, flag)
+            if not 1 <= port <= 65535:
+                raise UserError(f"--{flag}={port} is not a port: give one from 1 to 65535")
+        if self.camera_port == self.control_port:
+            raise UserError(f"--camera_port and --control_port are both {self.camera_port}: give two ports")
+        for flag in ("fps", "width", "height"):
+            if getattr(self, flag) < 1:
+                raise UserError(f"--{flag}={getattr(self, flag)}: give a whole number above 0")
+
 
 def check_port(port: int, what: str, flag: str) -> None:
     """Raise one line if `port` on 127.0.0.1 cannot be bound (as ZMQ binds it: reusing a port in TIME_WAIT)."""
@@ -67,6 +79,7 @@ class Twin:
         from lerobot_contrast.twin.physics import Physics
         from lerobot_contrast.twin.servos import ServoBank
 
+        config.check()
         self.config = config
         self.task = load_task_file(config.task).spec
         # Before MuJoCo loads and compiles (seconds): a twin already running is the usual reason a port is taken.

@@ -82,28 +82,31 @@ def record_command(args: argparse.Namespace, twin, root: Path, first: int, count
     ]
 
 
-def record(args: argparse.Namespace, twin, root: Path, first: int, count: int) -> int:
+def record(args: argparse.Namespace, twin, root: Path, first: int, count: int) -> str | None:
     """Run lerobot-record until the part's episodes are in, resuming after a failed run: on a loaded machine the
-    twin's bus sometimes misses LeRobot's 50 ms reply deadline, which stops lerobot-record (the saved episodes stay)."""
+    twin's bus sometimes misses LeRobot's 50 ms reply deadline, which stops lerobot-record (the saved episodes stay).
+    None once they are all in; else why not, in words (a run that exits 0 short of its episodes included)."""
     status = 0
     for _ in range(args.tries):
         status = subprocess.run(record_command(args, twin, root, first, count)).returncode
         if recorded(root) >= count:
-            return 0
-    return status
+            return None
+    if status != 0:
+        return f"lerobot-record stopped ({status})"
+    return f"lerobot-record saved {recorded(root)} of the {count} episodes of {root.name} in {args.tries} runs"
 
 
-def record_parts(args: argparse.Namespace, flags: list[str]) -> int:
-    """Record every unfinished part on a twin of its own, side by side; the first failed part's exit status (a
-    signal's is negative), else 0."""
+def record_parts(args: argparse.Namespace, flags: list[str]) -> str | None:
+    """Record every unfinished part on a twin of its own, side by side; why the first part that fell short did
+    (a signal's exit status is negative), else None."""
     from lerobot_contrast.twin.launch import running_twin
 
     todo = [part for part in shards(args) if recorded(part[0]) < part[2]]
     with contextlib.ExitStack() as stack:  # started one after another: each takes free ports of its own
         twins = [stack.enter_context(running_twin(*flags)) for _ in todo]
         with ThreadPoolExecutor(max_workers=max(len(todo), 1)) as pool:
-            statuses = list(pool.map(lambda twin, part: record(args, twin, *part), twins, todo))
-    return next((status for status in statuses if status != 0), 0)
+            shortfalls = list(pool.map(lambda twin, part: record(args, twin, *part), twins, todo))
+    return next((why for why in shortfalls if why is not None), None)
 
 
 def join_parts(args: argparse.Namespace) -> None:
@@ -162,12 +165,12 @@ def main(argv: list[str] | None = None) -> int:
         flags = [f"--seed={args.seed}", f"--fps={args.fps}", f"--width={args.width}", f"--height={args.height}"]
         began = time.monotonic()
         try:
-            status = record_parts(args, flags)
+            short = record_parts(args, flags)
         except UserError as error:
             print(f"error: {error}", file=sys.stderr)
             return 2
-        if status != 0:
-            print(f"error: lerobot-record stopped ({status}); run the same command again to go on", file=sys.stderr)
+        if short is not None:
+            print(f"error: {short}; run the same command again to go on", file=sys.stderr)
             return 1
         if args.shards > 1:
             join_parts(args)

@@ -59,7 +59,7 @@ def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
     twin = start_twin(f"--calibration_dir={tmp_path}", f"--camera_port={free_port()}", f"--control_port={free_port()}",
                       "--width=96", "--height=72", "--seed=5")  # fmt: skip
     try:
-        assert record.record(args, twin, demos, 0, 2) == 0
+        assert record.record(args, twin, demos, 0, 2) is None
         from lerobot_contrast.twin.placement_client import request
 
         scene = request({"cmd": "scene"}, int(twin.placement.rsplit(":", 1)[1]))["objects"]

@@ -6,6 +6,7 @@ import json
 import math
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -138,6 +139,26 @@ def test_the_recording_script_answers_a_bad_instruction_in_one_line(tmp_path):
                           capture_output=True, text=True, timeout=60)  # fmt: skip
     assert done.returncode == 2 and done.stderr.startswith("error: --task: the instruction 'juggle' is none of")
     assert done.stderr.count("\n") == 1
+
+
+def test_the_recorder_fails_when_lerobot_record_exits_0_short_of_its_episodes(tmp_path, monkeypatch):
+    from tests.study_scripts import load_script
+
+    record = load_script("record_so101_demos")
+    args = record.parse_args([f"--output={tmp_path / 'demos'}", "--episodes=3", "--tries=2"])
+    runs = []
+
+    def one_episode_then_stop(command):  # lerobot-record saving 1 episode each run and exiting 0
+        runs.append(command)
+        meta = tmp_path / "demos" / "meta"
+        meta.mkdir(parents=True, exist_ok=True)
+        (meta / "info.json").write_text(json.dumps({"total_episodes": len(runs)}))
+        return subprocess.CompletedProcess(command, 0)
+
+    monkeypatch.setattr(record.subprocess, "run", one_episode_then_stop)
+    twin = SimpleNamespace(robot_flags="--robot.type=so101_follower", placement="tcp://127.0.0.1:1")
+    why = record.record(args, twin, tmp_path / "demos", 0, 3)
+    assert why == "lerobot-record saved 2 of the 3 episodes of demos in 2 runs" and len(runs) == 2
 
 
 def test_as_an_evaluator_policy_it_carries_out_each_trials_goal_on_the_true_scene(placement, monkeypatch):

@@ -135,6 +135,10 @@ def run_twin(*flags: str) -> subprocess.CompletedProcess:
         (["--task=no_such_task"], "error: --task: 'no_such_task' is neither a task file path nor one of:"),
         (["--camera_prot=5555"], "error: unknown flag --camera_prot; did you mean --camera_port?"),
         (["--lens_k1=wide"], "error: --lens_k1:"),
+        (["--camera_port=70000"], "error: --camera_port=70000 is not a port: give one from 1 to 65535"),
+        (["--control_port=0"], "error: --control_port=0 is not a port: give one from 1 to 65535"),
+        (["--camera_port=6001", "--control_port=6001"], "error: --camera_port and --control_port are both 6001"),
+        (["--width=0"], "error: --width=0: give a whole number above 0"),
     ],
 )
 def test_bad_flags_are_one_line(flags, error):
