@@ -2,7 +2,7 @@
 # Create .venv (Python 3.12, chosen by .python-version) and install the repository's distributions editable.
 #   bash scripts/setup.sh         the evaluator and its plugins: what `python -m lerobot_contrast.eval` runs
 #   bash scripts/setup.sh --dev   and the test suite's tools: every extra ([dev]: Ray, training, the twin, the docs,
-#                                 pytest) and LIBERO with its scene assets
+#                                 pytest), LIBERO with its scene assets, and Chromium for the viewer's browser test
 set -euo pipefail
 cd "$(dirname "$0")/.."
 case "${1:-}" in
@@ -30,6 +30,15 @@ fi
 # The teleoperator (the twin's demonstrator for lerobot-record) needs the twin's packages, which the first command
 # does not install.
 "${pip[@]}" "${distributions[@]}" -e teleoperators/lerobot_teleoperator_so101_demo -e '.[dev]'
+# The run viewer's browser test (tests/view) drives Debian's Chromium through chromium-driver: installed here when
+# missing and this user may (root, as CI), else said once.
+if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null
+  else
+    echo "note: tests/view's browser test needs chromium and chromium-driver (apt-get install chromium chromium-driver)" >&2
+  fi
+fi
 # LIBERO through LeRobot, and its scene assets from the package registry, every file checked against the hash list
 # in the repository. Pinning every installed version keeps the rest as is; opencv-python (which LIBERO names) is
 # pinned to the headless build's version, as both install the same cv2 module.
