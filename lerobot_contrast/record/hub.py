@@ -9,7 +9,7 @@ import logging
 import os
 import re
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import httpx
@@ -168,9 +168,11 @@ def publish_run(
     commit_message: str | None = None,
     attempts: int = 5,
     backoff_s: float | None = None,
+    extra_files: Mapping[str, Path] | None = None,
 ) -> str:
     """Upload `run_dir` as the dataset repo `repo_id` in one commit; returns the commit URL. Without `backoff_s`, the
-    first retry waits LEROBOT_CONTRAST_HUB_BACKOFF_S seconds (default 1).
+    first retry waits LEROBOT_CONTRAST_HUB_BACKOFF_S seconds (default 1). `extra_files` adds files made for the
+    publication (the viewer's bundle), by their path in the repo.
 
     Files in the repo that the run no longer has are deleted in the same commit, so publishing twice
     leaves the repo exactly as publishing once."""
@@ -182,13 +184,15 @@ def publish_run(
     except OSError as error:
         raise HubError(f"{run_dir}: cannot lock the run to publish it ({error.strerror})") from None
     try:
-        return _publish(run_dir, repo_id, private, token, endpoint, commit_message, attempts, backoff_s)
+        files = run_files(run_dir) | dict(extra_files or {})
+        return _publish(run_dir, files, repo_id, private, token, endpoint, commit_message, attempts, backoff_s)
     finally:
         lock.release()
 
 
 def _publish(
     run_dir: Path,
+    files: dict[str, Path],
     repo_id: str,
     private: bool,
     token: str | None,
@@ -197,7 +201,6 @@ def _publish(
     attempts: int,
     backoff_s: float | None,
 ) -> str:
-    files = run_files(run_dir)
     api = HfApi(endpoint=endpoint, token=token)
     card = dataset_card(run_dir, repo_id, api.endpoint, any(p.startswith("dataset/data/") for p in files))
 

@@ -37,7 +37,7 @@ def perturbation_table(groups: list[Group], metric: str) -> dict[str, Any]:
         row = [markdown.perturbation_name(n)]
         for label, per in values.items():
             change = changes.get(label, {}).get(n)
-            row += [markdown.fmt(per.get(n), True), "-" if n == "original" else markdown.fmt(change)]
+            row += [markdown.fmt(per.get(n), True), "-" if n == "original" else markdown.fmt(change, True)]
         rows.append(row)
     intro = (
         f"{name} pooled over seeds (n = trials); the change is the mean over base instances of (perturbed trial - its "

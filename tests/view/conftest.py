@@ -1,0 +1,53 @@
+"""Runs to look at: a small contrast run with a dataset (videos), the same plan under a second policy (A/B), and
+the report of both, made once per session by the real commands."""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+EVAL = [sys.executable, "-m", "lerobot_contrast.eval", "--n_instances=4", "--seed=3", "--rerun=false"]
+# Noisy and deaf to half of the changed wording: some perturbed trials flip against their originals.
+NOISY = ["--policy.type=oracle", "--policy.noise_std=0.01", "--policy.language_blind=0.5"]
+
+
+def evaluate(output_dir: Path, *flags: str) -> Path:
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    done = subprocess.run([*EVAL, *flags, f"--output_dir={output_dir}"], capture_output=True, text=True, env=env,
+                          timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    return output_dir
+
+
+@pytest.fixture(scope="session")
+def runs(tmp_path_factory) -> dict[str, Path]:
+    """`noisy`: recorded with a dataset; `oracle`: the same plan, another policy, no dataset; `report`: report.md of
+    the noisy run alone."""
+    root = tmp_path_factory.mktemp("view")
+    noisy = evaluate(root / "noisy", *NOISY, "--record_dataset=true")
+    oracle = evaluate(root / "oracle", "--policy.type=oracle")
+    report = root / "report"
+    done = subprocess.run([sys.executable, "-m", "lerobot_contrast.report", str(noisy), f"--output_dir={report}"],
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    return {"noisy": noisy, "oracle": oracle, "report": report / "report.md"}
+
+
+@pytest.fixture
+def copy_of(tmp_path):
+    def copy(run: Path) -> Path:
+        target = tmp_path / run.name
+        shutil.copytree(run, target)
+        return target
+
+    return copy
+
+
+def report_rows(report_md: Path, title: str) -> list[list[str]]:
+    """The rows of the table in report.md's section `title` (its header left out)."""
+    section = report_md.read_text(encoding="utf-8").split(f"## {title}", 1)[1].split("\n## ", 1)[0]
+    lines = [line for line in section.splitlines() if line.startswith("|") and not line.startswith("|---")]
+    return [[cell.strip() for cell in line.strip().strip("|").split("|")] for line in lines[1:]]
