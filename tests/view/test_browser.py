@@ -91,3 +91,34 @@ def test_the_bundle_opens_from_disk(runs, tmp_path):
         wait_for(driver, 'a[href$="/all"]').click()
         wait_for(driver, "#pairs tr.pair").click()
         check_pair_plays(driver)
+
+
+def with_staging_check(run) -> tuple[int, int]:
+    """`run` with the staging bench's measurement (as the runner journals it) on its first perturbed trial that moved
+    an object; returns (original, perturbed) trial indexes."""
+    import json
+
+    journal = run / "journal.jsonl"
+    lines = [json.loads(line) for line in journal.read_text().splitlines()]
+    trial = next(t for t in lines if t["perturbation"] and t["instance"] and t["axis"] in ("S", "SB"))
+    objects = trial["instance"]["scene"]["objects"]
+    first, second = sorted(objects)[:2]
+    trial["extra"]["staging"] = {
+        "tolerance_m": 0.02, "planned_cost": trial["cost"], "moved_m": 0.05,
+        "before": {name: [x + 0.05, y, yaw] for name, (x, y, yaw) in objects.items()},
+        "placed": {first: objects[first][:2], second: [objects[second][0] + 0.051, objects[second][1]]},
+        "off_m": {first: 0.0, second: 0.031}, "accepted_off": [second],
+    }  # fmt: skip
+    journal.write_text("".join(json.dumps(t) + "\n" for t in lines))
+    original = next(t for t in lines if t["base_id"] == trial["base_id"] and t["perturbation"] is None)
+    return original["index"], trial["index"]
+
+
+def test_a_pair_shows_the_staging_check_where_the_run_measured_it(runs, copy_of, page_of):
+    run = copy_of(runs["noisy"])
+    original, perturbed = with_staging_check(run)
+    with chromium() as driver:
+        driver.get(page_of(run) + f"#/pair/r0/{original}/r0/{perturbed}")
+        check = wait_for(driver, f'.column[data-trial="{perturbed}"] .staging svg')
+        assert len(check.find_elements(By.CSS_SELECTOR, "rect")) == 2 and "3.1 cm off" in check.text
+        assert not driver.find_elements(By.CSS_SELECTOR, f'.column[data-trial="{original}"] .staging')
