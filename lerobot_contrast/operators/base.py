@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
 
@@ -60,3 +61,6 @@ class Operator(Protocol):
 
     def say(self, text: str) -> None:
         """Tell whoever watches the session something (one line, Rich markup allowed)."""
+
+    def scene_after(self, robot: Any, staged: Scene, staging: Staging) -> Scene:
+        """Where the episode left the objects (`staged`: as staged, the robot where the episode ended it)."""

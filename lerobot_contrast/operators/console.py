@@ -17,6 +17,7 @@ from rich.console import Console
 from rich.table import Table
 
 from lerobot_contrast.contrast.perturbation import perturbation_label
+from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
@@ -94,13 +95,27 @@ class OperatorConsole:
     def say(self, text: str) -> None:
         self.console.print(text)
 
+    def note(self, event: str, **facts: Any) -> None:
+        """Tell a program on the channel something that needs no answer (the arm's own label, for one)."""
+        self._send(event=event, **facts, **self._trial)
+
     def take_key(self) -> str | None:
         return self.answers.take_key()
 
+    def announce(self, context: TrialContext) -> dict[str, list[float] | None]:
+        """Show the trial and what to move for it; returns each object to move and its target (None: off the
+        workspace)."""
+        self._trial = {"trial": context.index, "instruction": context.instance.instruction}
+        return self._show_trial(context)
+
+    def scene_after(self, robot: Any, staged: Scene, staging: Staging) -> Scene:
+        if staging.measured is None or self.bench is None:
+            return staged
+        return self.bench.scene_after(robot, staged, staging.measured)  # where the camera saw them
+
     def stage(self, context: TrialContext) -> Staging:
         """Show what to move for this trial and time the operator from the prompt to "ready"."""
-        moves = self._show_trial(context)
-        self._trial = {"trial": context.index, "instruction": context.instance.instruction}
+        moves = self.announce(context)
         start = time.monotonic()
         while True:
             self.console.print(
@@ -158,6 +173,20 @@ class OperatorConsole:
             answer = self.answers.next().lower()
             if answer in ("", "a", "q"):
                 return {"": "fix", "a": "accept", "q": "stop"}[answer]
+            self.console.print(f"[red]not understood: {answer!r}[/]")
+
+    def call(self, trouble: str, fix: Mapping[str, list[float] | None]) -> str:
+        """Ring for a person at the bench (what to fix, and where each object goes: `fix`, None for off the
+        workspace) and wait: "done" on Enter, "stop" on q."""
+        self.console.print(f"\a[bold red]a person is needed at the bench:[/] {trouble}")
+        for name, where in fix.items():
+            self.console.print(f"  put {name} {'off the workspace' if where is None else _where_xy(where)}")
+        while True:
+            self.console.print("[bold]Enter[/] once fixed · [bold]q[/] stop session")
+            self._send(prompt="call", trouble=trouble, fix=dict(fix), **self._trial)
+            answer = self.answers.next().lower()
+            if answer in ("", "q"):
+                return "stop" if answer == "q" else "done"
             self.console.print(f"[red]not understood: {answer!r}[/]")
 
     def running(self) -> None:
@@ -227,6 +256,10 @@ def _number(answer: str, prefix: str) -> float | None:
         return float(value)
     except ValueError:
         return None
+
+
+def _where_xy(xy: list[float]) -> str:
+    return f"at ({xy[0]:+.3f}, {xy[1]:+.3f})"
 
 
 def _where(pose) -> str:

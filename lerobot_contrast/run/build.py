@@ -27,7 +27,7 @@ TASK_ROBOTS = {
     "vln_paper": "vln_sim",
     **dict.fromkeys(("libero_spatial", "libero_object", "libero_goal", "libero_10"), "libero_sim"),
 }
-OPERATORS = ("auto", "console")
+OPERATORS = ("auto", "console", "arm")
 DEFAULT_HARDWARE_FPS = 10.0
 
 
@@ -113,7 +113,8 @@ def make_observers(cfg: EvalConfig, task: Task, robot: Robot, run_dir: Path) -> 
 
 
 def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Operator | None:
-    """The operator console that stages and labels each trial, or None where the robot does it (--operator=auto)."""
+    """Who stages and labels each trial: the person at the console, the arm with its camera (--operator=arm), or
+    None where the robot does it in software (--operator=auto)."""
     scene_io = reports_scene(robot, task.storage_scene().objects)
     mode = cfg.operator or ("auto" if scene_io else "console")
     if mode == "auto" and not scene_io:
@@ -121,16 +122,22 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
             f"--operator=auto needs a robot that reports and stages this task's scene; {robot.name} cannot, "
             "so use --operator=console"
         )
-    if mode != "console":
+    if mode == "auto":
         if cfg.cost == "measured":
             raise ConfigError("--cost=measured needs --operator=console: it is what a camera measured of the staging")
         return None
     from lerobot_contrast.staging.setup import make_bench
 
     # The run directory is chosen after the console is built; the bench reads it when it first keeps a measurement.
-    bench = make_bench(cfg.staging, cfg.task, task, robot, cfg.cost, lambda: cfg.output_dir)
+    run_dir = lambda: cfg.output_dir  # noqa: E731
+    bench = make_bench(cfg.staging, cfg.task, task, robot, cfg.cost, run_dir)
     channel = None if cfg.operator_channel is None else Channel(cfg.operator_channel)
-    return OperatorConsole(Answers(sys.stdin), unit=unit, bench=bench, channel=channel)
+    console = OperatorConsole(Answers(sys.stdin), unit=unit, bench=bench, channel=channel)
+    if mode == "console":
+        return console
+    from lerobot_contrast.operators.arm_setup import arm_operator
+
+    return arm_operator(cfg.arm, robot, task, bench, console, run_dir)
 
 
 def run_fps(cfg: EvalConfig, robot: Robot) -> float | None:

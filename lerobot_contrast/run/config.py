@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import draccus
 
+from lerobot_contrast.operators.arm_args import ArmArgs
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.run.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.staging.args import StagingArgs
@@ -94,8 +95,10 @@ class EvalConfig:
     robot: robots.RobotConfig | None = None
     # Control rate in Hz; default: 10 on hardware, as fast as possible on a simulated robot.
     fps: float | None = None
-    # Who stages scenes and judges outcomes: console (an operator, prompted between trials) or auto (the robot
-    # reports and stages its own scene, as in simulation). Default: auto where the robot can, else console.
+    # Who stages scenes and judges outcomes: console (an operator, prompted between trials), arm (an SO-101 stages
+    # each trial itself and its calibrated camera labels it, calling a person only when needed; docs: unattended.md)
+    # or auto (the robot reports and stages its own scene, as in simulation). Default: auto where the robot can,
+    # else console.
     operator: str | None = None
     # With --operator=console: also write each of the console's prompts as one JSON line to this file, FIFO or
     # /dev/fd/N, for a program that answers the console (the twin's scripted person; docs: unattended.md).
@@ -134,6 +137,8 @@ class EvalConfig:
     # Staging with a calibrated camera: --staging.calibration=PATH, --staging.tolerance=0.02 (metres),
     # --staging.object_size=0.03, --staging.viewer=serve|spawn|none.
     staging: StagingArgs = field(default_factory=StagingArgs)
+    # The arm as its own operator (--operator=arm): --arm.tries, --arm.pace, --arm.uncertainty, --arm.unsure.
+    arm: ArmArgs = field(default_factory=ArmArgs)
 
 
 def resume_args(argv: list[str]) -> list[str]:
@@ -152,11 +157,17 @@ SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging", "operator_cha
 
 # Settings of interleaved runs (--policies), left out of a single-policy run's config.json while at their default.
 PAIRING_DEFAULTS = {"policies": None, "blind": False}
+# The arm's settings, left out of config.json while at their default (a run without --operator=arm has no use for them).
+ARM_DEFAULTS = {"arm": draccus.encode(ArmArgs())}
 
 
 def config_json(config: Any) -> dict[str, Any]:
     encoded = draccus.encode(config)
-    out = {k: v for k, v in encoded.items() if k not in SESSION_CHOICES and PAIRING_DEFAULTS.get(k, ...) != v}
+    out = {
+        k: v
+        for k, v in encoded.items()
+        if k not in SESSION_CHOICES and {**PAIRING_DEFAULTS, **ARM_DEFAULTS}.get(k, ...) != v
+    }
     if isinstance(out.get("stop"), dict) and not out["stop"].get("decided"):
         out["stop"] = {k: v for k, v in out["stop"].items() if k != "decided"}
     return out

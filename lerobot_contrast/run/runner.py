@@ -283,9 +283,7 @@ class RobotRunner:
             return read_scene(self.robot)
         robot = episode.path[-1] if episode.path else context.instance.scene.robot
         staged = Scene(dict(context.instance.scene.objects), robot)  # objects assumed where they were staged
-        if staging.measured is None:
-            return staged
-        return self.operator.bench.scene_after(self.robot, staged, staging.measured)  # where the camera saw them
+        return self.operator.scene_after(self.robot, staged, staging)  # where a camera saw them, if one did
 
     def _label(self, context: TrialContext, episode: Episode, scene_after: Scene) -> Label:
         instance = context.instance
@@ -351,6 +349,9 @@ class RobotRunner:
             extra["reset_s"] = round(staging.reset_s, 3)
             if staging.moved is not None:
                 extra["moved_reported"] = staging.moved
+            if staging.robot_s or staging.interventions:  # an operator that stages with the robot itself
+                extra["robot_s"] = round(staging.robot_s, 3)
+                extra["interventions"] = staging.interventions
         if staging.measured is not None:
             extra["staging"] = dict(staging.measured)
         return extra

@@ -48,12 +48,17 @@ class ArmMotion:
         return float(where[0]), float(where[1]), float(where[2])
 
     def links(self, joints: Mapping[str, float] | None = None, per_link: int = 4) -> np.ndarray:
-        """Points (N, 3) along the arm from its base to the jaws, `per_link` on each link, for masking its image."""
+        """Points (N, 3) covering the arm, its base to its jaws: every part's centre and `per_link` points along each
+        link, for masking its image."""
         self.jaws(0.0, joints)  # places the model at the joints
+        root = self.model.body_rootid[self.model.joint(arm.MOTOR_NAMES[0]).bodyid[0]]
+        bodies = [b for b in range(1, self.model.nbody) if self.model.body_rootid[b] == root]
+        parts = [self.data.geom_xpos[g] for g in range(self.model.ngeom) if self.model.geom_bodyid[g] in bodies]
         chain = [self.data.xpos[self.model.joint(name).bodyid[0]] for name in arm.MOTOR_NAMES]
         chain.append(self.data.site(reach.SITE).xpos)
         share = np.linspace(0.0, 1.0, per_link, endpoint=False)[:, None]
-        return np.concatenate([a + share * (b - a) for a, b in zip(chain, chain[1:], strict=False)] + [chain[-1][None]])
+        along = [a + share * (b - a) for a, b in zip(chain, chain[1:], strict=False)]
+        return np.concatenate([np.array(parts).reshape(-1, 3), *along, chain[-1][None]])
 
     def follow(self, waypoints: Sequence[reach.Waypoint], correction: Mapping[str, float] | None = None) -> None:
         """Move through `waypoints`, each joint interpolated from where the last goal left it; `correction` (radians

@@ -59,7 +59,9 @@ class Session:
         self.channel = Lines(read_end)
         # Wide lines keep the console's tables on one line each; unbuffered output shows each prompt when printed.
         env = {**os.environ, "COLUMNS": "200", "PYTHONUNBUFFERED": "1"}
-        command = [sys.executable, "-m", "lerobot_contrast.eval", *eval_argv, "--operator=console",
+        # The console by default; with --operator=arm the arm stages and the console is what it calls a person with.
+        chosen = [] if any(arg.startswith("--operator=") for arg in eval_argv) else ["--operator=console"]
+        command = [sys.executable, "-m", "lerobot_contrast.eval", *eval_argv, *chosen,
                    f"--operator_channel=/dev/fd/{self.write_end}"]  # fmt: skip
         self.child = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                       env=env, pass_fds=(self.write_end,))  # fmt: skip

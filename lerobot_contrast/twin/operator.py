@@ -122,6 +122,10 @@ class Operator:
                 self._place({name: self.moves[name] for name in flagged if name in self.moves})
                 return ""
             return "a"
+        if prompt == "call":  # the arm operator rings for a person: put each named object where it says
+            self.said.append(f"called: {message['trouble']}")
+            self._place({name: None if to is None else (to[0], to[1]) for name, to in message["fix"].items()})
+            return ""
         if prompt == "label":
             self.index, self.instruction = message["trial"], message["instruction"]
             return self._label()

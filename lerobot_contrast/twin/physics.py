@@ -7,7 +7,7 @@ import math
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from typing import TypeVar
 
 import mujoco
@@ -26,8 +26,12 @@ T = TypeVar("T")
 class Physics:
     """The world of `spec` with its arm driven by `bank`; `objects` are the bodies whose true poses are reported."""
 
-    def __init__(self, spec: mujoco.MjSpec, bank: ServoBank, objects: Iterable[str]):
+    def __init__(
+        self, spec: mujoco.MjSpec, bank: ServoBank, objects: Iterable[str], offsets: Mapping[str, float] | None = None
+    ):
         self.spec, self.bank, self.objects = spec, bank, tuple(objects)
+        # Each joint's true angle is its calibrated reading plus its offset: a calibration off the model's zero.
+        self.offsets = {name: (offsets or {}).get(name, 0.0) for name in arm.MOTOR_NAMES}
         self.lock = threading.RLock()
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
@@ -36,7 +40,7 @@ class Physics:
         self._stop = threading.Event()
         self.error: str | None = None  # why the real-time thread stopped, if it failed
         for name in arm.MOTOR_NAMES:
-            angle = arm.to_angle(name, bank.present(name))
+            angle = arm.to_angle(name, bank.present(name)) + self.offsets[name]
             self.data.qpos[self.model.joint(name).qposadr[0]] = angle
             self.data.ctrl[self.model.actuator(name).id] = angle
         mujoco.mj_forward(self.model, self.data)
@@ -49,14 +53,18 @@ class Physics:
         """One control period: the servos' profiles, then the physics under their setpoints, then the measurement."""
         self.bank.step(CONTROL_DT)
         # A servo without torque holds its last target here (a real one goes limp): the twin's arm never collapses.
-        targets = {n: arm.to_angle(n, self.bank.setpoint(n)) for n in arm.MOTOR_NAMES if self.bank.torque_enabled(n)}
+        targets = {
+            n: arm.to_angle(n, self.bank.setpoint(n)) + self.offsets[n]
+            for n in arm.MOTOR_NAMES
+            if self.bank.torque_enabled(n)
+        }
         with self.lock:
             for name, angle in targets.items():
                 self.data.ctrl[self.model.actuator(name).id] = angle
             mujoco.mj_step(self.model, self.data, nstep=self.substeps)
             measured = {n: float(self.data.qpos[self.model.joint(n).qposadr[0]]) for n in arm.MOTOR_NAMES}
         for name, angle in measured.items():
-            self.bank.set_present(name, arm.to_raw(name, angle))
+            self.bank.set_present(name, arm.to_raw(name, angle - self.offsets[name]))
 
     def run(self, seconds: float) -> None:
         """Advance `seconds` of simulated time at once, without sleeping (tests, scripted demonstrations)."""
@@ -114,9 +122,9 @@ class Physics:
         """Put the arm at rest at once; servos under torque hold the rest pose from now on."""
         with self.lock:
             for name in arm.MOTOR_NAMES:
-                self.data.qpos[self.model.joint(name).qposadr[0]] = arm.REST[name]
+                self.data.qpos[self.model.joint(name).qposadr[0]] = arm.REST[name] + self.offsets[name]
                 self.data.qvel[self.model.joint(name).dofadr[0]] = 0.0
-                self.data.ctrl[self.model.actuator(name).id] = arm.REST[name]
+                self.data.ctrl[self.model.actuator(name).id] = arm.REST[name] + self.offsets[name]
             mujoco.mj_forward(self.model, self.data)
             for name, (servo_id, _) in arm.MOTORS.items():
                 self.bank.set_present(name, arm.to_raw(name, arm.REST[name]))

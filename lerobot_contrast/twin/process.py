@@ -17,6 +17,12 @@ from lerobot_contrast.twin.faults import FaultsConfig
 CAMERA_NAME = "front"
 
 
+def joint_offsets(names: tuple[str, ...], degrees: float, seed: int) -> dict[str, float]:
+    """Each motor's calibration error (radians): `degrees` in size, its sign drawn per joint."""
+    signs = np.random.default_rng([seed, 3]).choice([-1.0, 1.0], len(names))
+    return {name: float(sign * np.radians(degrees)) for name, sign in zip(names, signs, strict=True)}
+
+
 @dataclass
 class TwinConfig:
     """Start a virtual SO-101 bench: LeRobot's `so101_follower` connects to its serial port and LeRobot's `zmq`
@@ -44,6 +50,9 @@ class TwinConfig:
     control_port: int = 5556
     # Seed of the objects' first placement and of the camera's sensor noise.
     seed: int = 0
+    # Each joint's calibration off the arm's model by this many degrees (its sign drawn per joint from --seed), as a
+    # user's calibration leaves a real arm a few degrees from the kinematic model's zero.
+    joint_offset_deg: float = 0.0
     faults: FaultsConfig = field(default_factory=FaultsConfig)
 
     def check(self) -> None:
@@ -52,6 +61,8 @@ class TwinConfig:
             port = getattr(self, flag)
             if not 1 <= port <= 65535:
                 raise UserError(f"--{flag}={port} is not a port: give one from 1 to 65535")
+        if not 0 <= self.joint_offset_deg <= 10:
+            raise UserError(f"--joint_offset_deg={self.joint_offset_deg:g}: give degrees from 0 to 10")
         if self.camera_port == self.control_port:
             raise UserError(f"--camera_port and --control_port are both {self.camera_port}: give two ports")
         for flag in ("fps", "width", "height"):
@@ -90,7 +101,9 @@ class Twin:
         self.bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
         # The camera draws the arm's meshes as light hulls (a third of the render time); contacts are unchanged.
         spec = build_spec(self.task, scene, extras=[view_hulls] if camera else [])
-        self.physics = Physics(spec, self.bank, self.task.objects)
+        self.physics = Physics(
+            spec, self.bank, self.task.objects, joint_offsets(arm.MOTOR_NAMES, config.joint_offset_deg, config.seed)
+        )
         self.with_camera = camera
         self.endpoints: dict[str, str] = {}
         self.cameras_flag = ""

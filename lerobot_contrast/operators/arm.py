@@ -1,0 +1,235 @@
+"""The arm as its own operator (`--operator=arm`): before each trial it looks at the table with the calibrated
+camera, picks each object that is off target and puts it where the trial wants it, looks again and redoes what is
+still off (a bounded number of rounds), and goes to rest; after the episode it lets go, withdraws, looks and labels
+the trial with the task's own goal check. It calls a person (the console's bell, then Enter) only for what it cannot
+do: an object not seen, out of reach, dropped twice, still off after its rounds, or a label it is unsure of.
+
+It reads only what the bench reads: LeRobot's so101_follower (its servos and its camera) and the calibration."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.contrast.task import Judgement
+from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.operators.arm_args import ArmArgs
+from lerobot_contrast.operators.arm_memory import ArmMemory
+from lerobot_contrast.operators.base import Label, SessionStopped, Staging
+from lerobot_contrast.operators.verdict import verdict
+from lerobot_contrast.so101 import arm, plan, reach
+from lerobot_contrast.so101.motion import ArmMotion, Stopped
+from lerobot_contrast.staging import seeing
+from lerobot_contrast.staging.check import Bench
+
+HOLD_BAND = 0.1  # rad: a gripper this near its angle around an object holds one (closed on nothing, it goes 0.25 past)
+
+
+class ArmOperator:
+    """`bench` is None: the arm checks its own staging. `person`: the console a person answers when called."""
+
+    bench = None
+
+    def __init__(self, robot: Any, task: Any, camera: Bench, person: Any, args: ArmArgs, memory: ArmMemory) -> None:
+        self.robot, self.task, self.camera, self.person, self.args = robot, task, camera, person, args
+        self.motion = ArmMotion(robot, plan.arm_model(task.spec), args.pace, self._stop_pressed)
+        self.size = camera.geometry.size
+        self.grip = reach.jaw_angle(self.motion.model, self.size)  # the gripper's angle around a held object
+        self.memory = memory
+        self.context: TrialContext | None = None
+        self.after: seeing.View | None = None
+        self.calls = 0  # a person called to the bench, all session
+        self._trial_calls = 0  # ... while staging this trial
+
+    # --- the operator interface ---
+    def stage(self, context: TrialContext) -> Staging:
+        self.context = context
+        self.person.announce(context)
+        spent = self.memory.recall(context.index)  # a run killed mid-staging resumes with what it spent
+        started, person_s = time.monotonic(), 0.0
+        try:
+            self.motion.open_and_withdraw()
+            person_s, rounds, view = self._place_all(context.instance.scene)
+            self.motion.rest()
+        except Stopped as stop:
+            self.say(f"[bold red]{stop}[/]")
+            self.memory.keep(context.index, spent.add(time.monotonic() - started - person_s, person_s, 0))
+            return Staging("stop")
+        robot_s = time.monotonic() - started - person_s
+        total = spent.add(robot_s, person_s, self._trial_calls)
+        self.memory.keep(context.index, total)
+        measured = self._record(context, view, rounds, total)
+        return Staging("ready", total.person_s, measured=measured, robot_s=total.robot_s,
+                       interventions=total.calls)  # fmt: skip
+
+    def fix_or_accept(self, off: Mapping[str, float | None], tolerance: float) -> str:
+        return "accept"  # the arm measured its own staging; nothing else checks it
+
+    def running(self) -> None:
+        self.person.running()
+
+    def take_key(self) -> str | None:
+        return self.person.take_key()
+
+    def aborted(self, reason: str) -> Label:
+        return self.person.aborted(reason)
+
+    def say(self, text: str) -> None:
+        self.person.say(text)
+
+    def scene_after(self, robot: Any, staged: Scene, staging: Staging) -> Scene:
+        """Let go, withdraw out of view, and look: the scene the trial left, as the camera sees it."""
+        self.motion.open_and_withdraw()
+        self.after = self._look()
+        return self.after.scene(staged)
+
+    def label(self, subgoals: Sequence[str], suggestion: Judgement | None, early: str | None) -> Label:
+        if early is not None and not subgoals:
+            return Label("done", success=early == "success", progress=float(early == "success"))
+        instance, view = self.context.instance, self.after
+        held = tuple(name for name, seen in view.seen.items() if seen.held)
+        said = verdict(self.task.is_achieved, instance, view.scene(instance.scene), view.unseen, held,
+                       self.args.uncertainty)  # fmt: skip
+        self.person.note("labelled", success=said.success, sure=said.sure)
+        if said.sure:
+            self.say(f"the camera labels it: {'success' if said.success else 'failure'}")
+            return Label("done", success=said.success, progress=float(said.success))
+        if self.args.unsure == "unlabelled":
+            self.say(f"unlabelled, for review: {said.why}")
+            return Label("done", success=said.success, progress=float(said.success), unlabelled=True)
+        self.say(f"[bold]the camera is unsure[/] ({said.why}): label it")
+        self.calls += 1
+        return self.person.label(subgoals, Judgement(said.success), None)
+
+    # --- staging ---
+    def _place_all(self, target: Scene) -> tuple[float, int, seeing.View]:
+        """Rounds of pick-and-place until every seen object is within tolerance; a person for the rest. Returns the
+        seconds spent waiting for a person, the rounds, and the last view."""
+        self._trial_calls, person_s, dropped = 0, 0.0, dict[str, int]()
+        view = self._look()
+        for round_ in range(1, self.args.tries + 1):
+            off = self._off(view, target)
+            if not off:
+                return person_s, round_ - 1, view
+            trouble = self._move(off, view, target, dropped)
+            view = self._look()
+            if trouble:
+                person_s += self._call(trouble, target)
+                view = self._look()
+        off = self._off(view, target)
+        if off:
+            person_s += self._call({name: "still off after the arm's tries" for name in off}, target)
+            view = self._look()
+        return person_s, self.args.tries, view
+
+    def _off(self, view: seeing.View, target: Scene) -> dict[str, Pose | None]:
+        """Objects to move: each coloured object off its target (or seen where the trial has none), with its target
+        (None: take it off the workspace)."""
+        off: dict[str, Pose | None] = {}
+        for name in self.camera.geometry.colours:
+            goal, seen = target.objects.get(name), view.seen.get(name)
+            if goal is None and seen is not None:
+                off[name] = None
+            elif goal is not None and not _inside(goal, self.camera.geometry.bounds):
+                continue  # its place is off the workspace: the camera cannot check it there
+            elif goal is not None and (
+                seen is None or seen.held or Pose(seen.x, seen.y).distance_to(goal) > self.camera.tolerance
+            ):
+                off[name] = goal
+        return off
+
+    def _move(self, off, view: seeing.View, target: Scene, dropped: dict[str, int]) -> dict[str, str]:
+        """Pick and place each object of `off` the camera sees, those whose target is free first; returns what
+        needs a person, with why."""
+        trouble: dict[str, str] = {}
+        for name in _order(off, view):
+            seen, goal = view.seen.get(name), off[name]
+            if seen is None:
+                trouble[name] = "not seen"
+                continue
+            if goal is None:
+                trouble[name] = "to take off the workspace, out of the arm's reach"
+                continue
+            try:
+                steps = reach.pick_and_place(self.motion.model, self.motion.joints(), seen.pose(), self.size,
+                                             (goal.x, goal.y))  # fmt: skip
+            except reach.Unreachable:
+                trouble[name] = "out of reach"
+                continue
+            self.motion.follow(steps)
+            landed = self._look().seen.get(name)
+            if landed is None or landed.held:
+                dropped[name] = dropped.get(name, 0) + 1
+                if dropped[name] >= 2:
+                    trouble[name] = "dropped twice"
+        return trouble
+
+    def _call(self, trouble: Mapping[str, str], target: Scene) -> float:
+        """Ring for a person to fix `trouble`, and wait for Enter; returns how long they took."""
+        self._trial_calls += 1
+        self.calls += 1
+        started = time.monotonic()
+        fix = {name: None if (goal := target.objects.get(name)) is None else [goal.x, goal.y] for name in trouble}
+        said = "; ".join(f"{name}: {why}" for name, why in trouble.items())
+        self.motion.rest()
+        if self.person.call(said, fix) == "stop":
+            raise SessionStopped("the operator stopped the session while the arm asked for help")
+        return time.monotonic() - started
+
+    def _look(self) -> seeing.View:
+        joints = self.motion.joints()
+        image = self.camera.frame(self.robot)
+        if image is None:
+            raise CameraLost()
+        jaws = self.motion.jaws(self.size, joints) if self._holding(joints) else None
+        return seeing.look(image, self.camera.calibration, self.camera.geometry, jaws, self.motion.links(joints))
+
+    def _holding(self, joints: Mapping[str, float]) -> bool:
+        """Whether the jaws stopped closing where an object of the task's size holds them apart."""
+        return abs(joints[arm.GRIPPER] - self.grip) < HOLD_BAND
+
+    def _stop_pressed(self) -> bool:
+        return self.person.take_key() == "estop"
+
+    def _record(self, context: TrialContext, view: seeing.View, rounds: int, total) -> dict[str, Any]:
+        placed = view.scene(context.current)
+        before = context.current
+        return {
+            "tolerance_m": self.camera.tolerance,
+            "planned_cost": round(context.planned_cost, 4),
+            "moved_m": round(float(self.camera.cost(before, placed)), 4),
+            "before": before.to_json()["objects"],
+            "placed": {name: [round(p.x, 4), round(p.y, 4)] for name, p in placed.objects.items()},
+            "unseen": list(view.unseen),
+            "rounds": rounds,
+            "robot_s": round(total.robot_s, 2),
+            "person_calls": total.calls,
+        }
+
+
+class CameraLost(SessionStopped):
+    """The camera sent no frame: the arm cannot see to stage or label."""
+
+    def __init__(self) -> None:
+        super().__init__("the camera stopped sending frames, so the arm cannot see to stage or label; check it")
+
+
+def _inside(pose: Pose, bounds) -> bool:
+    (x0, y0), (x1, y1) = bounds
+    return x0 <= pose.x <= x1 and y0 <= pose.y <= y1
+
+
+def _order(off: Mapping[str, Pose | None], view: seeing.View) -> list[str]:
+    """Objects to move, those whose target another object to move still sits on last."""
+
+    def blocked(name: str) -> bool:
+        goal = off[name]
+        return goal is not None and any(
+            other != name and (seen := view.seen.get(other)) is not None
+            and Pose(seen.x, seen.y).distance_to(goal) < 0.05
+            for other in off
+        )  # fmt: skip
+
+    return sorted(off, key=blocked)

@@ -1,0 +1,21 @@
+"""The `--arm.*` flags of `python -m lerobot_contrast.eval --operator=arm` (light: read before anything heavy loads)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+UNSURE = ("ask", "unlabelled")
+
+
+@dataclass
+class ArmArgs:
+    """The arm as its own operator (--operator=arm): it stages each trial and labels it with the calibrated camera."""
+
+    # Rounds of pick-and-place the arm tries before it calls a person to place what is still off target.
+    tries: int = 3
+    # Each motion's time as a multiple of the planner's (larger: slower and surer).
+    pace: float = 1.5
+    # Metres the camera may be off: a label that turns when a named object is moved this far is unsure.
+    uncertainty: float = 0.006
+    # What an unsure label does: ask (a person at the console labels it) or unlabelled (recorded for review later).
+    unsure: str = "ask"
