@@ -140,5 +140,7 @@ def test_no_module_names_a_module_of_a_distribution_its_own_does_not_require():
                     tops = [node.value.split(".")[0].split(":")[0]]
                 else:
                     continue
-                wrong += [f"{path.relative_to(ROOT)} names {top}" for top in tops if top in graph and top not in allowed]
+                wrong += [
+                    f"{path.relative_to(ROOT)} names {top}" for top in tops if top in graph and top not in allowed
+                ]
     assert not wrong, wrong

@@ -16,13 +16,13 @@ from lerobot_robot_locobot.keys import create_keys
 
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.vln.locobot_sim import SimBackend
+from lerobot_contrast.ports import free_port
 from tests.robots.locobot_helpers import (
     FREE_PORTS,
     ChaosProxy,
     CountingBackend,
     DyingBackend,
     client_config,
-    free_port,
 )
 from tests.robots.test_ros2_backend import FakeDriver
 
