@@ -13,8 +13,9 @@ import pyarrow.compute as pc
 import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 
-from lerobot_contrast.record.dataset import DATASET_DIR
-
+# record.dataset.DATASET_DIR (a test checks they agree): importing that module would load LeRobot and torch, seconds
+# the viewer need not spend before it can serve.
+DATASET_DIR = "dataset"
 # The signals plotted under the videos: the robot's state and the policy's actions, as LeRobot names them.
 SIGNALS = ("observation.state", "action")
 

@@ -93,3 +93,10 @@ def test_the_running_estimate_is_report_s(runs):
     done = stats.done(run.results).sort_values("index")
     assert curve["trials"][-1] == len(done)
     assert curve["estimate"][-1] == pytest.approx(stats.full_value(run.results, "spl"), abs=1e-4)
+
+
+def test_the_viewer_reads_the_dataset_where_the_recorder_writes_it():
+    from lerobot_contrast.record import dataset
+    from lerobot_contrast.view import episodes
+
+    assert episodes.DATASET_DIR == dataset.DATASET_DIR

@@ -78,8 +78,8 @@ function abBlock() {
   if (!doc.same_plan.length) return null;
   const items = doc.same_plan.map(([a, b]) => el("li", {},
     el("a", { href: `#/ab/${a}/${b}`, class: "ab-link" }, `${view.runs[a].policy} (${view.runs[a].name}) beside ${view.runs[b].policy} (${view.runs[b].name}), per base`)));
-  const sessions = doc.sessions.map((s) => verdictTable(s)).filter(Boolean);
-  return el("section", {}, el("h2", {}, "Policies on the same plan"), el("ul", {}, items), sessions);
+  const sessions = doc.sessions.map((s) => verdictTable(s));
+  return el("section", {}, el("h2", {}, "Policies side by side"), el("ul", {}, items), sessions);
 }
 
 function verdictTable(session) {
@@ -97,7 +97,7 @@ function overview() {
   const firstRun = doc.runs[0].id;
   const openPerturbation = (key) => { location.hash = `#/p/${firstRun}/${key === "original" ? "all" : key}`; };
   const page = el("div", { id: "overview" });
-  page.append(el("h2", {}, "Runs"), doc.runs.map(settingsBlock));
+  page.append(el("h2", {}, "Runs"), ...doc.runs.map(settingsBlock));
   for (const run of doc.runs) {
     if (run.videos_absent) page.append(el("p", { class: "absent" }, `${run.name}: ${run.videos_absent}.`));
     if (run.journal_absent) page.append(el("p", { class: "absent" }, `${run.name}: ${run.journal_absent}.`));

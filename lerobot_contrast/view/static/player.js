@@ -75,7 +75,7 @@ function play(controls, columns, runIds, episodes) {
       return video;
     }));
     for (const signal of episode.signals) {
-      const chart = lineChart(signal.name, signal.time, signal.labels.map((l, i) => ({ label: l, values: signal.series[i] })), { width: 340, height: 170, xLabel: "time (s)" });
+      const chart = lineChart(signal.name, signal.time, signal.labels.map((l, i) => ({ label: l, values: signal.series[i] })), { width: Math.max(260, (box.clientWidth || 600) / 2 - 12), height: 170, xLabel: "time (s)" });
       charts.push(chart.chart);
       box.append(chart);
     }
