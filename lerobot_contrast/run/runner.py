@@ -316,7 +316,7 @@ class RobotRunner:
             progress=label.progress,
             reference_length=self.task.reference_length(context.instance),
             cost=self._cost(staging),
-            extra=self._extra(context, staging, episode),
+            extra={**self._extra(context, staging, episode), **({"unlabelled": True} if label.unlabelled else {})},
         )
         return outcome
 

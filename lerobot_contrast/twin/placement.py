@@ -9,6 +9,7 @@ forward, y to the arm's left; every reply has "ok", and "error" with one line wh
   {"cmd": "board", "x": m, "y": m, "yaw_deg": deg}  lay the printed calibration board on the table
   {"cmd": "remove_board"}               -> {"removed": bool}
   {"cmd": "reset_arm"}                  put the arm at rest at once
+  {"cmd": "close"}                      -> {"closed": true}: answer no more requests (nothing may read the truth)
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from lerobot_contrast.so101.scene import object_sizes, start_poses, table_extent
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.placement_client import DEFAULT_PORT, HOST
 
-COMMANDS = ("place", "scene", "board", "remove_board", "reset_arm")
+COMMANDS = ("place", "scene", "board", "remove_board", "reset_arm", "close")
 POLL_MS = 100  # how often the serving thread looks up to see whether it should stop
 
 
@@ -46,6 +47,7 @@ class PlacementServer:
         self._socket.setsockopt(zmq.LINGER, 0)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._closing = False
 
     def start(self) -> str:
         """Bind (a port in use is one line saying so) and serve on a daemon thread; returns the address."""
@@ -74,6 +76,9 @@ class PlacementServer:
             if not self._socket.poll(POLL_MS):
                 continue
             self._socket.send_string(json.dumps(self.answer(self._socket.recv())))
+            if self._closing:  # after the reply: from now on the port answers nobody
+                self._socket.close()
+                return
 
     def answer(self, message: bytes) -> dict[str, Any]:
         """The reply to one request, as sent back."""
@@ -103,6 +108,9 @@ class PlacementServer:
             }
         if command == "place":
             return {"moved_aside": self._place(request)}
+        if command == "close":
+            self._closing = True
+            return {"closed": True}
         if command == "board":
             from lerobot_contrast.twin.board import add_board
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import json
 import shlex
-import subprocess
 import sys
 import tempfile
 import time
@@ -26,13 +25,11 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.run.flags import ScriptParser
-from lerobot_contrast.so101.scene import start_poses
 from lerobot_contrast.twin.console_session import run_answered
 from lerobot_contrast.twin.launch import running_twin
 from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan
 from lerobot_contrast.twin.placement_client import PlacementClient
-
-BOARD = {"x": 0.30, "y": 0.0, "yaw_deg": 0.0}
+from lerobot_contrast.twin.table_calibration import calibrate_table
 
 
 class Judge(Operator):
@@ -71,30 +68,11 @@ class Judge(Operator):
         self.labels[self.index] = (success, self.plan.judge(self.index, self.instruction, scene, lifted), sure)
 
 
-def calibrate(twin, work: Path, task: str) -> Path:
-    """Lay the board on the cleared table, calibrate the camera through the robot's own flags, take it away."""
-    placement = PlacementClient(twin.placement)
-    from lerobot_contrast.domains.task_file import load_task_file
-
-    before = placement.poses()
-    for name, pose in start_poses(load_task_file(task).spec, None).items():  # clear the board's place
-        placement.place(name, pose.x, pose.y)
-    placement.ask({"cmd": "board", **BOARD})
-    output = work / "table.calibration.json"
-    board = [f"--board.{key}={value}" for key, value in BOARD.items()]
-    command = [sys.executable, "-m", "lerobot_contrast.calibrate", f"--task={task}", *board, f"--output={output}",
-               *shlex.split(twin.robot_flags)]  # fmt: skip
-    done = subprocess.run(command, capture_output=True, text=True)
-    placement.ask({"cmd": "remove_board"})
-    for name, (x, y, _, yaw) in before.items():
-        placement.place(name, x, y, yaw)
-    if done.returncode != 0:
-        raise UserError(f"calibrating the twin's camera failed: {done.stderr.strip().splitlines()[-1:]}")
-    return output
-
-
 def figures(judge: Judge, run_dir: Path, hours: float) -> dict[str, str]:
-    records = [json.loads(line) for line in (run_dir / "journal.jsonl").read_text().splitlines()]
+    journal = run_dir / "journal.jsonl"
+    if not journal.is_file():
+        raise UserError(f"the evaluation on the twin did not run (no {journal}); see the log above")
+    records = [json.loads(line) for line in journal.read_text().splitlines()]
     done = [r for r in records if r["status"] == "done"]
     if not done:
         raise UserError(f"no trial finished in {run_dir}; see the log above")
@@ -140,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with running_twin(f"--task={args.task}", f"--joint_offset_deg={args.joint_offset_deg}",
                           f"--seed={args.seed}") as twin:  # fmt: skip
-            table = calibrate(twin, work, args.task)
+            table = calibrate_table(twin, args.task, work / "table.calibration.json")
             run_dir = work / "run"
             eval_argv = [f"--task={args.task}", *shlex.split(twin.robot_flags), "--operator=arm",
                          "--policy.type=so101_demonstrator", f"--policy.options={{placement: {twin.placement}}}",

@@ -1,0 +1,109 @@
+"""The arm as its own operator on the twin, as on the bench: LeRobot's so101_follower and zmq camera, the table
+calibrated from the printed board. The camera locates a cube in a bin and one held in the gripper; a session runs
+with the twin's placement socket closed (nothing reads the truth) and, killed while the arm stages, resumes with
+nothing lost and nothing counted twice."""
+
+import json
+import shlex
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from lerobot_contrast.domains import load_task
+from lerobot_contrast.twin.launch import running_twin
+from lerobot_contrast.twin.placement_client import PlacementClient, TwinError
+from lerobot_contrast.twin.table_calibration import calibrate_table
+from tests.twin.test_eval_on_twin import save_so101_act
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory):
+    work = tmp_path_factory.mktemp("arm")
+    with running_twin("--task=so101_blocks") as twin:
+        yield twin, calibrate_table(twin, "so101_blocks", work / "table.calibration.json"), work
+
+
+def connected_arm(twin, table):
+    from lerobot_contrast.operators.arm import ArmOperator
+    from lerobot_contrast.operators.arm_args import ArmArgs
+    from lerobot_contrast.operators.arm_memory import ArmMemory
+    from lerobot_contrast.run.build import make_robot, register_robots
+    from lerobot_contrast.run.config import EvalConfig
+    from lerobot_contrast.run.flags import parse_config
+    from lerobot_contrast.staging.setup import make_bench
+
+    register_robots()
+    flags = ["--task=so101_blocks", *shlex.split(twin.robot_flags), f"--staging.calibration={table}"]
+    cfg = parse_config(EvalConfig, [*flags, "--staging.viewer=none"])
+    robot = make_robot(cfg)
+    robot.connect()
+    task = load_task("so101_blocks")
+    camera = make_bench(cfg.staging, cfg.task, task, robot, "distance", lambda: None)
+    return robot, ArmOperator(robot, task, camera, None, ArmArgs(), ArmMemory(lambda: None))
+
+
+def test_the_camera_sees_a_cube_in_a_bin_and_one_held_in_the_gripper(bench):
+    from lerobot_contrast.so101 import reach
+
+    twin, table, _ = bench
+    placement = PlacementClient(twin.placement)
+    placement.place("red_cube", 0.30, 0.18, 0.3)  # inside the left bin
+    placement.place("blue_cube", 0.28, -0.05, 0.0)
+    time.sleep(1.0)
+    robot, operator = connected_arm(twin, table)
+    try:
+        view = operator._look()
+        red = view.seen["red_cube"]
+        assert np.hypot(red.x - 0.30, red.y - 0.18) < 0.015 and not red.held
+        blue = view.seen["blue_cube"]
+        steps = reach.pick_and_place(operator.motion.model, operator.motion.joints(), blue.pose(), 0.03, (0.3, 0.0))
+        operator.motion.follow(steps[:4])  # open, descend, close, lift: the cube in the jaws, 10 cm up
+        held = operator._look()
+        truth = placement.poses()["blue_cube"]
+        assert truth[2] > 0.05  # the twin's truth: it is up in the jaws
+        assert held.seen["blue_cube"].held
+        assert np.hypot(held.seen["blue_cube"].x - truth[0], held.seen["blue_cube"].y - truth[1]) < 0.03
+        operator.motion.open_and_withdraw()
+    finally:
+        robot.disconnect()
+
+
+def eval_command(twin, table, run_dir, policy, *flags):
+    return [sys.executable, "-m", "lerobot_contrast.eval", "--task=so101_blocks", *shlex.split(twin.robot_flags),
+            "--operator=arm", f"--policy.path={policy}", "--policy.device=cpu", "--strategy=contrast",
+            "--n_instances=1", "--perturbations=L", "--max_episode_s=1", "--fps=10", "--rerun=false",
+            f"--staging.calibration={table}", "--staging.viewer=none", f"--output_dir={run_dir}", *flags]  # fmt: skip
+
+
+def test_with_the_placement_socket_closed_a_run_killed_mid_staging_resumes_with_nothing_lost(bench, tmp_path):
+    twin, table, work = bench
+    policy = save_so101_act(tmp_path / "act")
+    assert PlacementClient(twin.placement).ask({"cmd": "close"}) == {"ok": True, "closed": True}
+    with pytest.raises(TwinError):
+        PlacementClient(twin.placement, timeout_s=1.0).ask({"cmd": "scene"})
+    run_dir = tmp_path / "run"
+    child = subprocess.Popen(eval_command(twin, table, run_dir, policy), stdin=subprocess.PIPE,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    memory = run_dir / "arm_staging.json"
+    deadline = time.monotonic() + 240
+    while not memory.is_file() and time.monotonic() < deadline and child.poll() is None:
+        time.sleep(0.5)
+    child.send_signal(signal.SIGKILL)  # mid-staging: the first object placed, the rest still to do
+    child.wait()
+    kept = json.loads(memory.read_text())
+    assert kept["trial"] == 0 and kept["spent"]["robot_s"] > 0
+    assert not (run_dir / "journal.jsonl").is_file() or not (run_dir / "journal.jsonl").read_text().strip()
+    resume = eval_command(twin, table, run_dir, policy, "--resume=true")
+    done = subprocess.run(resume, input="\n" * 40, capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
+    records = [json.loads(line) for line in (run_dir / "journal.jsonl").read_text().splitlines()]
+    assert [r["index"] for r in records] == sorted({r["index"] for r in records})  # each trial once
+    first = records[0]
+    assert first["status"] == "done" and first["extra"]["robot_s"] >= kept["spent"]["robot_s"]
+    assert first["extra"]["staging"]["rounds"] >= 0 and "placed" in first["extra"]["staging"]
