@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from lerobot_contrast.reporting import analysis, markdown
@@ -87,8 +88,31 @@ def _rows(lines: list[str]) -> list[list[str]]:
     return [[cell.strip() for cell in line.strip().strip("|").split("|")] for line in table]
 
 
-def report_tables(runs: list[Run], metric: str | None = None) -> dict[str, Any]:
-    """Every table of report.md the page shows, with the metric it is about."""
+def session_tables(pair_dir: Path) -> list[dict[str, Any]]:
+    """The interleaved comparison `report` adds for an A/B session (`--policies`): its sequential decisions, each
+    policy's results and the paired differences, one table per Markdown table, titled by its heading."""
+    from lerobot_contrast.pairing.comparison import comparison_lines
+
+    tables, heading, text, rows = [], "", "", []
+    for line in [*comparison_lines(pair_dir), ""]:
+        if line.startswith("|"):
+            rows.append(line)
+            continue
+        if rows:
+            header, *body = _rows(rows)
+            title = f"{pair_dir.name}: {heading}" if heading else f"{pair_dir.name}: the sequential paired test"
+            tables.append(_table(title, text, header, body))
+            rows, text = [], ""
+        if line.startswith("### "):
+            heading = line[4:]
+        elif line and not line.startswith("#"):
+            text = line
+    return tables
+
+
+def report_tables(runs: list[Run], metric: str | None = None, pair_dirs: list[Path] = ()) -> dict[str, Any]:
+    """Every table of report.md the page shows (with an A/B session's comparison, as `report` adds it), with the
+    metric it is about."""
     metric = metric or analysis.primary_metric(runs)
     groups = group_runs(runs)
     tables = [
@@ -98,6 +122,7 @@ def report_tables(runs: list[Run], metric: str | None = None) -> dict[str, Any]:
         versus_table(groups, runs, metric),
         comparison_table(runs),
         sequential_table(runs),
+        *(table for path in pair_dirs for table in session_tables(path)),
     ]
     return {
         "metric": metric,

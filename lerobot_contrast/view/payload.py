@@ -100,7 +100,7 @@ def build(inputs: Inputs, live: bool) -> dict[str, Any]:
     return {
         "stamp": stamp(inputs),
         "live": live and not all(run.complete for run in runs),
-        "report": numbers.report_tables(runs, metric),
+        "report": numbers.report_tables(runs, metric, inputs.pair_dirs),
         "runs": [run_json(run_id, run, metric) for run_id, run in by_id.items()],
         "sessions": sessions_json(inputs.pair_dirs, ids),
         "same_plan": same_plan,

@@ -24,16 +24,27 @@ def evaluate(output_dir: Path, *flags: str) -> Path:
 
 @pytest.fixture(scope="session")
 def runs(tmp_path_factory) -> dict[str, Path]:
-    """`noisy`: recorded with a dataset; `oracle`: the same plan, another policy, no dataset; `report`: report.md of
-    the noisy run alone."""
+    """`noisy`: recorded with a dataset; `oracle`: the same plan, another policy, no dataset; `session`: an A/B
+    session of both policies (--policies); `report` and `session_report`: report.md of the noisy run alone, and of
+    the session."""
     root = tmp_path_factory.mktemp("view")
     noisy = evaluate(root / "noisy", *NOISY, "--record_dataset=true")
     oracle = evaluate(root / "oracle", "--policy.type=oracle")
-    report = root / "report"
-    done = subprocess.run([sys.executable, "-m", "lerobot_contrast.report", str(noisy), f"--output_dir={report}"],
+    session = evaluate(root / "session", "--policies=oracle,oracle:noise_std=0.01:language_blind=0.5")
+    return {
+        "noisy": noisy,
+        "oracle": oracle,
+        "session": session,
+        "report": report(noisy, root / "report"),
+        "session_report": report(session, root / "session_report"),
+    }
+
+
+def report(run: Path, output_dir: Path) -> Path:
+    done = subprocess.run([sys.executable, "-m", "lerobot_contrast.report", str(run), f"--output_dir={output_dir}"],
                           capture_output=True, text=True, timeout=600)  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
-    return {"noisy": noisy, "oracle": oracle, "report": report / "report.md"}
+    return output_dir / "report.md"
 
 
 @pytest.fixture
@@ -47,7 +58,12 @@ def copy_of(tmp_path):
 
 
 def report_rows(report_md: Path, title: str) -> list[list[str]]:
-    """The rows of the table in report.md's section `title` (its header left out)."""
-    section = report_md.read_text(encoding="utf-8").split(f"## {title}", 1)[1].split("\n## ", 1)[0]
-    lines = [line for line in section.splitlines() if line.startswith("|") and not line.startswith("|---")]
+    """The rows of the table in report.md's section `title` (a ## or ### heading; its header row left out)."""
+    section = report_md.read_text(encoding="utf-8").split(f"## {title}", 1)[1].splitlines()[1:]
+    lines = []
+    for line in section:
+        if line.startswith("#"):
+            break
+        if line.startswith("|") and not line.startswith("|---"):
+            lines.append(line)
     return [[cell.strip() for cell in line.strip().strip("|").split("|")] for line in lines[1:]]

@@ -82,6 +82,19 @@ def test_two_policies_side_by_side_with_a_run_that_has_no_videos(runs, page_of):
         assert absent.startswith("Videos absent: this run recorded no dataset")
 
 
+def test_an_ab_session_shows_the_sequential_verdict_and_plays_both_policies(runs, page_of):
+    import json
+
+    verdict = json.loads((runs["session"] / "summary.json").read_text())["stopping"]["pairs"][0]["verdict"]
+    with chromium() as driver:
+        driver.get(page_of(runs["session"]))
+        wait_for(driver, "a.ab-link").click()
+        assert wait_for(driver, "#ab .verdict").text == verdict
+        wait_for(driver, "#ab-table td.cell").click()
+        wait_for(driver, "#pair .column")
+        assert len(driver.find_elements(By.CSS_SELECTOR, "#pair .column")) == 2
+
+
 def test_the_bundle_opens_from_disk(runs, tmp_path):
     out = tmp_path / "site"
     assert main([str(runs["noisy"]), f"--bundle={out}"]) == 0

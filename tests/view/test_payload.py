@@ -100,3 +100,16 @@ def test_the_viewer_reads_the_dataset_where_the_recorder_writes_it():
     from lerobot_contrast.view import episodes
 
     assert episodes.DATASET_DIR == dataset.DATASET_DIR
+
+
+def test_an_ab_session_shows_report_s_interleaved_comparison_and_the_verdict(runs):
+    doc = build(load_inputs([str(runs["session"])]), live=False)
+    (session,) = doc["sessions"]
+    assert [p["run"] for p in session["policies"]] == ["r0", "r1"] and doc["same_plan"] == [["r0", "r1"]]
+    assert session["stopping"]["pairs"][0]["verdict"] in ("first better", "second better", "undecided")
+    tables = {t["title"]: t["rows"] for t in doc["report"]["tables"]}
+    report = runs["session_report"]
+    assert tables["session: the sequential paired test"] == report_rows(report, "Interleaved comparison: session")
+    assert tables["session: Each policy"] == report_rows(report, "Each policy")
+    minus = next(title for title in tables if " minus " in title)
+    assert tables[minus] == report_rows(report, minus.split(": ", 1)[1])
