@@ -80,11 +80,38 @@ class ResetTimeCost:
         return sum(self.handling_s.get(n, self.per_object_s) + d / self.hand_speed_m_s for n, d in moves.items())
 
 
+@dataclass(frozen=True)
+class RobotTimeCost:
+    """Seconds the robot spends staging the scene itself (`--operator=arm`): one pick-and-place per moved object,
+    whose planned motions take `per_object_s` whatever the distance. The seconds it measures replace the plan."""
+
+    per_object_s: float = 0.0
+    tolerance: float = 0.005
+    name: str = "robot_time"
+    unit: str = "s"
+
+    def __call__(self, current: Scene, target: Scene) -> float:
+        return self.per_object_s * len(moved_objects(current, target, self.tolerance))
+
+
+@dataclass(frozen=True)
+class InterventionCost:
+    """Times a person is called to the bench (`--operator=arm`): planned as none, counted as they happen."""
+
+    name: str = "interventions"
+    unit: str = "calls"
+
+    def __call__(self, current: Scene, target: Scene) -> float:
+        return 0.0
+
+
 # measured: planned as distance; a calibrated camera's measurement of each staging replaces it (staging/check.py).
 COST_MODELS = {
     "distance": DistanceCost,
     "reset_time": ResetTimeCost,
     "measured": partial(DistanceCost, name="measured"),
+    "robot_time": RobotTimeCost,
+    "interventions": InterventionCost,
 }
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -113,7 +114,7 @@ class ArmOperator:
             return Label("done", success=said.success, progress=float(said.success), unlabelled=True)
         self.say(f"[bold]the camera is unsure[/] ({said.why}): label it")
         self.calls += 1
-        return self.person.label(subgoals, Judgement(said.success), None)
+        return replace(self.person.label(subgoals, Judgement(said.success), None), asked=True)
 
     # --- staging ---
     def _place_all(self, target: Scene) -> tuple[int, seeing.View]:

@@ -33,6 +33,7 @@ class Label:
     success: bool = False
     progress: float | None = None
     unlabelled: bool = False  # recorded without a label, for review later (an arm operator unsure of the outcome)
+    asked: bool = False  # a person was called to give this label (an arm operator unsure of the outcome)
 
 
 class Operator(Protocol):

@@ -51,9 +51,26 @@ def summarize(
             "cumulative_cost": done[-1].cumulative_cost if done else 0.0,
             "wall_time_s": sum(r.duration_s or 0.0 for r in done),
         },
+        **_robot_staging(done),
         "per_perturbation": {name: _group_stats(group) for name, group in by_perturbation.items()},
         "per_family": {name: _group_stats(group) for name, group in sorted(by_family.items())},
         **({} if stopping is None else {"stopping": stopping}),
+    }
+
+
+def _robot_staging(done: list[TrialRecord]) -> dict[str, Any]:
+    """Where the arm staged trials itself (--operator=arm): its seconds of staging and the person's calls, the
+    paper's experimenter cost beside the metres moved."""
+    staged = [r.extra for r in done if "robot_s" in r.extra]
+    if not staged:
+        return {}
+    return {
+        "robot_staging": {
+            "trials": len(staged),
+            "robot_s": round(sum(e["robot_s"] for e in staged), 2),
+            "interventions": sum(e.get("interventions", 0) + int(e.get("label_asked", False)) for e in staged),
+            "unlabelled": sum(bool(e.get("unlabelled")) for e in staged),
+        }
     }
 
 
@@ -88,4 +105,10 @@ def format_summary(summary: dict[str, Any], unit: str) -> str:
         label = perturbation_label(None if name == ORIGINAL else name)
         lines.append(line(label, rows[name], rows[name]["cost"]))
     lines += ["-" * len(header), line("all", total, total["cumulative_cost"])]
+    robot = summary.get("robot_staging")
+    if robot:
+        lines.append(
+            f"staged by the arm: {robot['trials']} trials, {robot['robot_s']:.0f} robot seconds, a person called "
+            f"{robot['interventions']} times, {robot['unlabelled']} left unlabelled for review"
+        )
     return "\n".join(lines)

@@ -122,6 +122,8 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
             f"--operator=auto needs a robot that reports and stages this task's scene; {robot.name} cannot, "
             "so use --operator=console"
         )
+    if cfg.cost in ("robot_time", "interventions") and mode != "arm":
+        raise ConfigError(f"--cost={cfg.cost} counts what the arm's own staging spends: it needs --operator=arm")
     if mode == "auto":
         if cfg.cost == "measured":
             raise ConfigError("--cost=measured needs --operator=console: it is what a camera measured of the staging")

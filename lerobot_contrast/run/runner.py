@@ -91,6 +91,7 @@ class RobotRunner:
         self.max_steps, self.max_episode_s = max_steps, max_episode_s
         self.observers = list(observers)
         self.cost_unit = cost_unit
+        self.cost_name = getattr(cost_model, "name", None)
         # A robot that stages its own scene and lets it settle in physics (`measures_staging`) is charged the metres
         # it reads back after settling, priced by the run's cost model, rather than the plan's poses.
         settles = getattr(robot, "measures_staging", False) and self.scene_io and operator is None
@@ -297,9 +298,13 @@ class RobotRunner:
         early = episode.ended_by if episode.ended_by in ("success", "failure") else None
         return self.operator.label(self.task.subgoals(instance), judgement, early)
 
-    def _cost(self, staging: Staging) -> float | None:
+    def _cost(self, staging: Staging, label: Label | None = None) -> float | None:
         if self.operator is None:
             return staging.moved  # what a robot read back after settling its staging, else None: the plan's cost
+        if self.cost_name == "robot_time":  # the arm staged: its own seconds, not a person's
+            return staging.robot_s
+        if self.cost_name == "interventions":
+            return float(staging.interventions + int(label is not None and label.asked))
         if self.cost_unit == "s":
             return staging.reset_s
         return staging.moved
@@ -315,8 +320,8 @@ class RobotRunner:
             duration_s=episode.duration_s,
             progress=label.progress,
             reference_length=self.task.reference_length(context.instance),
-            cost=self._cost(staging),
-            extra={**self._extra(context, staging, episode), **({"unlabelled": True} if label.unlabelled else {})},
+            cost=self._cost(staging, label),
+            extra={**self._extra(context, staging, episode), **_label_notes(label)},
         )
         return outcome
 
@@ -406,6 +411,11 @@ def _connected(device: Any) -> bool:
         return bool(device is not None and device.is_connected)
     except Exception:  # a device too broken to say is treated as closed: connect() will tell
         return False
+
+
+def _label_notes(label: Label) -> dict[str, bool]:
+    """How a label came about, where not the usual way: a person asked by the arm, or none given yet."""
+    return {key: True for key, said in (("label_asked", label.asked), ("unlabelled", label.unlabelled)) if said}
 
 
 def _skipped(context: TrialContext) -> Outcome:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from lerobot_contrast.so101 import PICK_AND_PLACE_STEPS as STEPS
 from lerobot_contrast.so101 import arm
 
 ARM_JOINTS = arm.MOTOR_NAMES[:5]
@@ -204,15 +205,15 @@ def pick_and_place(
     carried = solve(model, point, carry_at, None, lift)
     lowered = solve(model, point, release, None, carried)
     return [
-        Waypoint("open", {**hover, arm.GRIPPER: opened}, 1.0),
-        Waypoint("descend", {**at_grasp, arm.GRIPPER: opened}, 0.8),
-        Waypoint("close", {**at_grasp, arm.GRIPPER: closed}, 0.6),
-        Waypoint("lift", {**lift, arm.GRIPPER: closed}, 0.8),
-        Waypoint("carry", {**carried, arm.GRIPPER: closed}, 1.0),
-        Waypoint("lower", {**lowered, arm.GRIPPER: closed}, 0.8),
-        Waypoint("release", {**lowered, arm.GRIPPER: opened}, 0.5),
-        Waypoint("retreat", {**carried, arm.GRIPPER: opened}, 0.6),
-        Waypoint("rest", dict(arm.REST), 1.0),
+        Waypoint("open", {**hover, arm.GRIPPER: opened}, STEPS["open"]),
+        Waypoint("descend", {**at_grasp, arm.GRIPPER: opened}, STEPS["descend"]),
+        Waypoint("close", {**at_grasp, arm.GRIPPER: closed}, STEPS["close"]),
+        Waypoint("lift", {**lift, arm.GRIPPER: closed}, STEPS["lift"]),
+        Waypoint("carry", {**carried, arm.GRIPPER: closed}, STEPS["carry"]),
+        Waypoint("lower", {**lowered, arm.GRIPPER: closed}, STEPS["lower"]),
+        Waypoint("release", {**lowered, arm.GRIPPER: opened}, STEPS["release"]),
+        Waypoint("retreat", {**carried, arm.GRIPPER: opened}, STEPS["retreat"]),
+        Waypoint("rest", dict(arm.REST), STEPS["rest"]),
     ]
 
 

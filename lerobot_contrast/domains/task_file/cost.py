@@ -3,7 +3,14 @@ handling time per object, built from the core's cost models."""
 
 from __future__ import annotations
 
-from lerobot_contrast.contrast.cost import COST_MODELS, CostModel, DistanceCost, ResetTimeCost
+from lerobot_contrast.contrast.cost import (
+    COST_MODELS,
+    CostModel,
+    DistanceCost,
+    InterventionCost,
+    ResetTimeCost,
+    RobotTimeCost,
+)
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file.schema import CostSpec
 
@@ -19,4 +26,11 @@ def make_cost_model(spec: CostSpec, name: str) -> CostModel:
             tolerance=spec.tolerance,
             handling_s=dict(spec.handling_s),
         )
+    if name == "robot_time":  # the arm's pick and place, at the pace it stages with
+        from lerobot_contrast.operators.arm_args import ArmArgs
+        from lerobot_contrast.so101 import PICK_AND_PLACE_S
+
+        return RobotTimeCost(per_object_s=PICK_AND_PLACE_S * ArmArgs().pace, tolerance=spec.tolerance)
+    if name == "interventions":
+        return InterventionCost()
     raise UserError(f"--cost: unknown cost model {name!r}; choose from: {', '.join(COST_MODELS)}")
