@@ -32,8 +32,13 @@ class Dataset:
     def video_keys(self) -> list[str]:
         return [k for k, v in self.info.get("features", {}).items() if v.get("dtype") == "video"]
 
-    def absent_why(self) -> str | None:
-        """Why the page has no videos of this run (None: it has them)."""
+    def absent_why(self, config: dict[str, Any]) -> str | None:
+        """Why the page has no videos of the run with settings `config` (None: it has them)."""
+        if not self.info and config.get("record_dataset"):
+            return (
+                f"this run recorded a dataset, but {self.root} is not there (a hub: run is downloaded without its "
+                "episodes), so its videos are absent"
+            )
         if not self.info:
             return "this run recorded no dataset (--record_dataset=true records one), so its videos are absent"
         if not self.video_keys:

@@ -69,7 +69,7 @@ def run_json(run_id: str, run: Run, metric: str) -> dict[str, Any]:
         "trials": [trials.trial_json(r) for r in records],
         "pairs": trials.pairs(records),
         "curves": trials.curves(run, metric),
-        "videos_absent": dataset.absent_why(),
+        "videos_absent": dataset.absent_why(run.config),
         "journal_absent": None if records else "this run has no journal.jsonl, so its scenes and pairs are absent",
     }
 

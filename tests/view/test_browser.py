@@ -135,3 +135,27 @@ def test_a_pair_shows_the_staging_check_where_the_run_measured_it(runs, copy_of,
         check = wait_for(driver, f'.column[data-trial="{perturbed}"] .staging svg')
         assert len(check.find_elements(By.CSS_SELECTOR, "rect")) == 2 and "3.1 cm off" in check.text
         assert not driver.find_elements(By.CSS_SELECTOR, f'.column[data-trial="{original}"] .staging')
+
+
+def test_a_run_in_progress_refreshes_as_trials_come_in(runs, copy_of, page_of):
+    import json
+
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    run = copy_of(runs["noisy"])
+    journal = run / "journal.jsonl"
+    lines = journal.read_text().splitlines(keepends=True)
+    summary = json.loads((run / "summary.json").read_text())
+    (run / "summary.json").write_text(json.dumps({**summary, "complete": False}))
+    journal.write_text("".join(lines[:5]))
+    with chromium() as driver:
+        driver.get(page_of(run))
+        wait_for(driver, "#overview")
+        assert driver.find_element(By.ID, "live").is_displayed()
+        before = table_rows(driver, "Summary")
+        journal.write_text("".join(lines))
+        WebDriverWait(driver, 20).until(
+            lambda d: d.execute_script("return view.doc.runs[0].trials.length") == len(lines)
+        )
+        after = table_rows(driver, "Summary")
+        assert after != before and int(after[0][2]) + int(after[0][3]) == len(lines)  # trials and n/a: every line

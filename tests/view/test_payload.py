@@ -61,7 +61,7 @@ def test_changed_words_and_moved_objects_are_marked():
 
 def test_each_recorded_trial_has_its_episode_videos_and_signals(runs):
     dataset = Dataset(runs["noisy"])
-    assert dataset.absent_why() is None
+    assert dataset.absent_why({"record_dataset": True}) is None
     recorded = [r for r in read_journal(runs["noisy"] / "journal.jsonl") if r.dataset_episode is not None]
     for record in recorded:
         episode = dataset.episode(record.dataset_episode)
@@ -77,6 +77,15 @@ def test_a_run_without_a_dataset_says_its_videos_are_absent_and_shows_the_rest(r
     (run,) = doc["runs"]
     assert "recorded no dataset" in run["videos_absent"] and run["pairs"] and run["curves"]["cost"]
     json.dumps(doc)  # a document the page can take
+
+
+def test_a_run_whose_dataset_was_left_behind_says_so(runs, copy_of):
+    import shutil
+
+    run = copy_of(runs["noisy"])
+    shutil.rmtree(run / "dataset")
+    (only,) = build(load_inputs([str(run)]), live=False)["runs"]
+    assert "recorded a dataset, but" in only["videos_absent"] and only["pairs"]
 
 
 def test_two_runs_of_one_plan_are_shown_policy_beside_policy(runs):
