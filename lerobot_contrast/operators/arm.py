@@ -8,9 +8,10 @@ It reads only what the bench reads: LeRobot's so101_follower (its servos and its
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -58,9 +59,10 @@ class ArmOperator:
         self._before = self.memory.recall(context.index)  # a run killed mid-staging resumes with what it spent
         self._started, self._person_s, self._trial_calls = time.monotonic(), 0.0, 0
         try:
-            self.motion.open_and_withdraw()
-            rounds, view = self._place_all(context.instance.scene)
-            self.motion.rest()
+            with _link("staging"):
+                self.motion.open_and_withdraw()
+                rounds, view = self._place_all(context.instance.scene)
+                self.motion.rest()
         except Stopped as stop:
             self.say(f"[bold red]{stop}[/]")
             self._checkpoint()
@@ -94,8 +96,9 @@ class ArmOperator:
 
     def scene_after(self, robot: Any, staged: Scene, staging: Staging) -> Scene:
         """Let go, withdraw out of view, and look: the scene the trial left, as the camera sees it."""
-        self.motion.open_and_withdraw()
-        self.after = self._look()
+        with _link("labelling"):
+            self.motion.open_and_withdraw()
+            self.after = self._look()
         return self.after.scene(staged)
 
     def label(self, subgoals: Sequence[str], suggestion: Judgement | None, early: str | None) -> Label:
@@ -246,6 +249,19 @@ class CameraLost(SessionStopped):
 
     def __init__(self) -> None:
         super().__init__("the camera stopped sending frames, so the arm cannot see to stage or label; check it")
+
+
+class ArmLost(SessionStopped):
+    """The arm stopped answering while it staged or labelled; what staging spent is kept for the resume."""
+
+
+@contextlib.contextmanager
+def _link(doing: str) -> Iterator[None]:
+    """A lost serial link (pyserial's errors are OSErrors; LeRobot's bus raises ConnectionError) is one line."""
+    try:
+        yield
+    except OSError as error:
+        raise ArmLost(f"the arm stopped answering while {doing} ({' '.join(str(error).split())}); check it") from None
 
 
 def _inside(pose: Pose, bounds) -> bool:

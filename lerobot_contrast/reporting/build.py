@@ -80,6 +80,7 @@ def write_markdown(runs: list[Run], groups: list[Group], versus, metric: str, pa
     ]
     lines += markdown.summary_section(analysis.summary_rows(groups), unit)
     lines += markdown.sequential_section(runs)
+    lines += markdown.robot_staging_section(runs)
     pooled = "Pooled over seeds; n = trials."
     lines += markdown.by_group_section(
         f"{name} per perturbation", pooled, analysis.by_column(groups, "perturbation", metric), order

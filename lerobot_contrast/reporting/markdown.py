@@ -181,6 +181,21 @@ def sequential_section(runs: list[Run]) -> list[str]:
     return ["## Sequential stopping", "", *table(header, rows), "", note, ""]
 
 
+def robot_staging_section(runs: list[Run]) -> list[str]:
+    """Runs the arm staged itself (--operator=arm): its seconds of staging and the person's calls, from the summary."""
+    rows = []
+    for run in runs:
+        r = run.summary.get("robot_staging")
+        if r:
+            each = r["robot_s"] / r["trials"] if r["trials"] else 0.0
+            rows.append([run.name, str(r["trials"]), f"{r['robot_s']:.0f}", f"{each:.1f}", str(r["interventions"]),
+                         str(r["unlabelled"])])  # fmt: skip
+    if not rows:
+        return []
+    header = ["run", "trials staged", "robot s", "robot s per trial", "person calls", "unlabelled"]
+    return ["## Staged by the arm", "", *table(header, rows), ""]
+
+
 def notes_section(runs: list[Run]) -> list[str]:
     notes = []
     for run in runs:

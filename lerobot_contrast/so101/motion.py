@@ -17,6 +17,7 @@ from lerobot_contrast.so101 import arm, reach
 
 STEP_HZ = 30.0  # goals sent this often while moving: LeRobot's own teleoperation rate
 SETTLE_S = 0.3  # after the last goal, the servos close the rest of the way
+READ_RETRIES = 3  # a status packet lost on a busy bus is asked for again before the arm counts as gone
 
 
 class Stopped(UserError):
@@ -34,7 +35,7 @@ class ArmMotion:
 
     def joints(self) -> dict[str, float]:
         """The arm's joint angles (radians), read from its servos."""
-        positions = self.robot.bus.sync_read("Present_Position")
+        positions = self.robot.bus.sync_read("Present_Position", num_retry=READ_RETRIES)
         return {name: arm.from_lerobot(name, float(positions[name])) for name in arm.MOTOR_NAMES}
 
     def jaws(self, size: float, joints: Mapping[str, float] | None = None) -> tuple[float, float, float]:

@@ -61,6 +61,7 @@ class Judge(Operator):
         for name, target in ({} if instance is None else instance.scene.objects).items():
             if name in truth.objects and self.plan.task.spec.workspace.area.contains(target.x, target.y):
                 self.placement_m.append(truth.objects[name].distance_to(target))
+                self.said.append(f"judge: {name} {self.placement_m[-1] * 100:.1f} cm from its target (truth)")
 
     def _judged(self, success: bool, sure: bool) -> None:
         scene, heights = self.placement.look()

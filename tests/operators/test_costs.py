@@ -40,3 +40,14 @@ def test_the_summary_counts_robot_seconds_calls_and_unlabelled_trials():
         format_summary(summary, "s")
     )
     assert "robot_staging" not in summarize([record(0, {})], settings={}, complete=True)
+
+
+def test_the_report_has_a_table_of_what_the_arm_staged():
+    from types import SimpleNamespace
+
+    from lerobot_contrast.reporting.markdown import robot_staging_section
+
+    summary = summarize([record(0, {"robot_s": 30.0, "interventions": 1})], settings={}, complete=True)
+    lines = robot_staging_section([SimpleNamespace(name="run", summary=summary)])
+    assert lines[0] == "## Staged by the arm" and any("| run | 1 | 30 | 30.0 | 1 | 0 |" in line for line in lines)
+    assert robot_staging_section([SimpleNamespace(name="run", summary={})]) == []
