@@ -16,7 +16,7 @@ import numpy as np
 from lerobot.robots import RobotConfig
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.run.flags import (
+from lerobot_contrast.spine.flags import (
     ConfigError,
     bool_flags,
     check_names,
@@ -127,7 +127,7 @@ def calibrate(cfg: CalibrateConfig, images: dict[str, np.ndarray]) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from lerobot_contrast.run.build import check_robot_type, register_robots
+    from lerobot_contrast.spine.build import check_robot_type, register_robots
 
     try:
         argv = join_values(list(sys.argv[1:] if argv is None else argv), bool_flags(CalibrateConfig))

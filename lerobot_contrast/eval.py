@@ -12,14 +12,14 @@ from lerobot_contrast.contrast.stopping import summary_line
 from lerobot_contrast.lanes.choice import use_threads
 from lerobot_contrast.policies import make_policy
 from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.run.build import (
+from lerobot_contrast.spine.build import (
     check_robot_type,
     make_operator,
     make_robot,
     register_robots,
 )
-from lerobot_contrast.run.config import EvalConfig, resume_args
-from lerobot_contrast.run.flags import (
+from lerobot_contrast.spine.config import EvalConfig, resume_args
+from lerobot_contrast.spine.flags import (
     bool_flags,
     check_names,
     flag_names,
@@ -29,7 +29,7 @@ from lerobot_contrast.run.flags import (
     robot_type,
     wants_help,
 )
-from lerobot_contrast.run.run_setup import (
+from lerobot_contrast.spine.run_setup import (
     check_new_run_dir,
     connect,
     default_output_dir,
@@ -40,7 +40,7 @@ from lerobot_contrast.run.run_setup import (
 from lerobot_contrast.terminal.progress import RunProgress, header_lines
 
 if TYPE_CHECKING:
-    from lerobot_contrast.run.evaluation import Evaluation
+    from lerobot_contrast.spine.evaluation import Evaluation
 
 
 def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
@@ -68,7 +68,7 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
         return run_and_report(cfg, equipped(cfg, planned, robot, policy, operator))
     finally:
         if robot.is_connected:
-            from lerobot_contrast.run.runner import release
+            from lerobot_contrast.spine.runner import release
 
             # A lost robot cannot disconnect cleanly (its servos do not answer): one line after the error, no traceback.
             failed = release(robot)
@@ -80,8 +80,8 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
 
 
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
-    from lerobot_contrast.run.evaluation import run
-    from lerobot_contrast.run.run_end import ENDED_EARLY, say_ended_early
+    from lerobot_contrast.spine.evaluation import run
+    from lerobot_contrast.spine.run_end import ENDED_EARLY, say_ended_early
 
     path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
     resume = f"--output_dir={path} --resume=true"

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.run.flags import ConfigError, parse_config, usage_text, wants_help
+from lerobot_contrast.spine.flags import ConfigError, parse_config, usage_text, wants_help
 
 USAGE = "python -m lerobot_contrast.publish RUN_DIR --repo_id=USER/NAME [--flag=value | --flag value] ..."
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.metrics import METRICS
-from lerobot_contrast.run.flags import ConfigError, parse_config, usage_text, wants_help
+from lerobot_contrast.spine.flags import ConfigError, parse_config, usage_text, wants_help
 
 USAGE = "python -m lerobot_contrast.report RUN_DIR [RUN_DIR ...] [--flag=value | --flag value] ..."
 

@@ -19,7 +19,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.contrast.trial import TrialRecord
 from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.run.flags import parse_config, usage_text, wants_help
+from lerobot_contrast.spine.flags import parse_config, usage_text, wants_help
 
 if TYPE_CHECKING:
     import rerun.blueprint as rrb

@@ -18,7 +18,7 @@ from lerobot_contrast.pairing import session as command
 from lerobot_contrast.publish import main as publish
 from lerobot_contrast.report import main as report
 from lerobot_contrast.review import main as review
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.runner import RobotRunner
 
 SMALL = ["--n_instances=2", "--seed=5", "--perturbations=SB1", "--max_episode_steps=40", "--rerun=false"]
 TWO_ORACLES = "oracle,oracle:noise_std=0.02"

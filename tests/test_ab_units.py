@@ -14,7 +14,7 @@ from lerobot_contrast.pairing.decide import PairMonitor
 from lerobot_contrast.pairing.interleave import Interleaver, Seat, policy_order
 from lerobot_contrast.pairing.policy_list import parse_policies
 from lerobot_contrast.policies.base import PolicyArgs
-from lerobot_contrast.run.config import EvalConfig, config_json
+from lerobot_contrast.spine.config import EvalConfig, config_json
 
 
 def test_each_entry_names_a_policy_with_its_own_options():

@@ -13,8 +13,8 @@ from lerobot_contrast.contrast.cost import DistanceCost
 from lerobot_contrast.contrast.strategy import make_plan
 from lerobot_contrast.contrast.trial import Outcome
 from lerobot_contrast.record.summary import format_summary
-from lerobot_contrast.run.evaluation import Evaluation, run
-from lerobot_contrast.run.runner import RobotLostError
+from lerobot_contrast.spine.evaluation import Evaluation, run
+from lerobot_contrast.spine.runner import RobotLostError
 from lerobot_contrast.terminal.lines import trial_line
 from tests.contrast.test_strategy import bases, pusher
 from tests.contrast.toy_task import ToyTask

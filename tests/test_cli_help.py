@@ -57,7 +57,7 @@ def test_every_command_takes_both_flag_forms_and_booleans_as_true_or_false():
     from lerobot_contrast.publish import parse_args as publish_args
     from lerobot_contrast.report import parse_args as report_args
     from lerobot_contrast.review import ReviewConfig
-    from lerobot_contrast.run.flags import parse_config
+    from lerobot_contrast.spine.flags import parse_config
 
     for argv in (
         ["run", "--repo_id=u/n", "--private=true"],

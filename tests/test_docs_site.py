@@ -15,7 +15,7 @@ def test_mkdocs_builds_the_site_strictly(tmp_path):
     built = subprocess.run(mkdocs, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert built.returncode == 0, built.stderr[-3000:]
     api = (tmp_path / "site" / "api" / "index.html").read_text(encoding="utf-8")
-    assert 'id="lerobot_contrast.run.evaluation.run"' in api  # rendered from the docstrings, not left as `:::`
+    assert 'id="lerobot_contrast.spine.evaluation.run"' in api  # rendered from the docstrings, not left as `:::`
 
 
 def test_the_api_reference_covers_every_public_name_and_nothing_else():

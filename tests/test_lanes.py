@@ -17,10 +17,10 @@ from lerobot_contrast.lanes.runner import LaneRunner, chains
 from lerobot_contrast.lanes.seats import batches_lanes
 from lerobot_contrast.policies import PolicyArgs, make_policy
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
-from lerobot_contrast.run.build import make_robot, register_robots
-from lerobot_contrast.run.config import EvalConfig, StopArgs
-from lerobot_contrast.run.evaluation import run
-from lerobot_contrast.run.runner import RobotLostError
+from lerobot_contrast.spine.build import make_robot, register_robots
+from lerobot_contrast.spine.config import EvalConfig, StopArgs
+from lerobot_contrast.spine.evaluation import run
+from lerobot_contrast.spine.runner import RobotLostError
 
 WALL_CLOCK = ("started_at", "duration_s")
 register_robots()

@@ -15,7 +15,7 @@ from lerobot_contrast.domains.language_table.language_table_sim import LanguageT
 from lerobot_contrast.eval import main
 from lerobot_contrast.policies.pretrained import PolicyLoadError, PretrainedPolicy
 from lerobot_contrast.record.observer import QuietObserver
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.runner import RobotRunner
 from tests.lerobot_helpers import save_act
 
 RUN = ["--n_instances=2", "--seed=1", "--perturbations=[L,SB2]", "--max_episode_steps=12"]

@@ -24,8 +24,12 @@ DISTRIBUTIONS = (
     "lerobot_policy_vln_navigator",
     "lerobot_env_language_table",
 )
-COMMANDS = ("eval", "report", "review", "publish", "calibrate", "sweep", "twin")
-MAINS = {"sweep": "lerobot_contrast.sweep.command:main", "twin": "lerobot_contrast.twin.__main__:main"}
+COMMANDS = ("eval", "report", "review", "view", "publish", "calibrate", "sweep", "twin")
+MAINS = {
+    "sweep": "lerobot_contrast.sweep.command:main",
+    "twin": "lerobot_contrast.twin.__main__:main",
+    "view": "lerobot_contrast.view.command:main",
+}
 
 
 def test_every_distribution_is_installed_under_its_underscore_name_at_the_one_version():

@@ -12,8 +12,8 @@ import pytest
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.eval import planned_evaluation
-from lerobot_contrast.run.config import EvalConfig
-from lerobot_contrast.run.evaluation import assume_unchanged, run
+from lerobot_contrast.spine.config import EvalConfig
+from lerobot_contrast.spine.evaluation import assume_unchanged, run
 
 
 def evaluate(output_dir: Path, seed: int = 3, resume: bool = False, **settings):

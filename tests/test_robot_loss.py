@@ -16,8 +16,8 @@ from lerobot.utils.decorators import check_if_already_connected, check_if_not_co
 from lerobot_contrast import eval as eval_module
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.record.observer import QuietObserver
-from lerobot_contrast.run import runner
-from lerobot_contrast.run.runner import RobotRunner, release
+from lerobot_contrast.spine import runner
+from lerobot_contrast.spine.runner import RobotRunner, release
 from tests.contrast.test_strategy import bases
 from tests.contrast.toy_task import ToyTask
 

@@ -4,8 +4,8 @@ with one exit code each, for a single run and for an interleaved session alike."
 import pytest
 
 from lerobot_contrast.operators.base import SessionStopped
-from lerobot_contrast.run.run_end import ENDED_EARLY, say_ended_early
-from lerobot_contrast.run.runner import RobotLostError
+from lerobot_contrast.spine.run_end import ENDED_EARLY, say_ended_early
+from lerobot_contrast.spine.runner import RobotLostError
 
 RESUME = "--output_dir=out --resume=true"
 

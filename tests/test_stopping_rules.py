@@ -12,8 +12,8 @@ import pytest
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.trial import Outcome, TrialContext
 from lerobot_contrast.eval import main, planned_evaluation
-from lerobot_contrast.run.config import EvalConfig, StopArgs
-from lerobot_contrast.run.evaluation import run
+from lerobot_contrast.spine.config import EvalConfig, StopArgs
+from lerobot_contrast.spine.evaluation import run
 
 
 def succeeds(pattern):

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_contrast.run.config import EvalConfig
+from lerobot_contrast.spine.config import EvalConfig
 from lerobot_contrast.sweep.carry import Carry, journal_lines, local_run_dir, mark_folder, pack, unpack
 from lerobot_contrast.sweep.shipping import shipped_paths
 from lerobot_contrast.sweep.worker import run_cell

@@ -16,7 +16,7 @@ from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.strategy import PlannedTrial, exceeds_budget
 from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
 from lerobot_contrast.record.observer import EpisodeObserver
-from lerobot_contrast.run.evaluation import STAGED, Evaluation, Execute, LoopState, trials
+from lerobot_contrast.spine.evaluation import STAGED, Evaluation, Execute, LoopState, trials
 
 
 @dataclass

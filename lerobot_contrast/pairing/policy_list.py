@@ -10,7 +10,7 @@ from pathlib import Path
 
 from lerobot_contrast.policies import POLICIES
 from lerobot_contrast.policies.base import PolicyArgs
-from lerobot_contrast.run.flags import ConfigError
+from lerobot_contrast.spine.flags import ConfigError
 
 # The --policy.* options an entry may set for itself, with how their values are read.
 OPTIONS = {"noise_std": float, "language_blind": float, "device": str, "use_amp": bool}

@@ -20,12 +20,19 @@ from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import RunDir, disk_full_said, open_run_dir, write_json_atomic
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.record.third_party import third_party_output
-from lerobot_contrast.run.build import choose_robot, make_operator, make_robot, needs_camera
-from lerobot_contrast.run.config import ConfigError, EvalConfig, config_json
-from lerobot_contrast.run.evaluation import Evaluation
-from lerobot_contrast.run.run_end import ENDED_EARLY, say_ended_early
-from lerobot_contrast.run.run_setup import connect, default_output_dir, dry_run, equipped, planned_evaluation, validate
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.build import choose_robot, make_operator, make_robot, needs_camera
+from lerobot_contrast.spine.config import ConfigError, EvalConfig, config_json
+from lerobot_contrast.spine.evaluation import Evaluation
+from lerobot_contrast.spine.run_end import ENDED_EARLY, say_ended_early
+from lerobot_contrast.spine.run_setup import (
+    connect,
+    default_output_dir,
+    dry_run,
+    equipped,
+    planned_evaluation,
+    validate,
+)
+from lerobot_contrast.spine.runner import RobotRunner
 
 
 def check_pair_flags(cfg: EvalConfig) -> list[PolicySpec]:

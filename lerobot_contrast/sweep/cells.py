@@ -18,9 +18,9 @@ import yaml
 
 from lerobot_contrast.policies import PRETRAINED_BUILD, policy_entry
 from lerobot_contrast.record.shared_episodes import EPISODE_SETTINGS, FOLDER
-from lerobot_contrast.run.build import TASK_ROBOTS, choose_robot, register_robots
-from lerobot_contrast.run.config import ConfigError, EvalConfig, config_json
-from lerobot_contrast.run.flags import flag_names, flag_types
+from lerobot_contrast.spine.build import TASK_ROBOTS, choose_robot, register_robots
+from lerobot_contrast.spine.config import ConfigError, EvalConfig, config_json
+from lerobot_contrast.spine.flags import flag_names, flag_types
 
 FILE_KEYS = ("output_dir", "eval", "grid", "cells", "share_episodes")
 # Settings the sweep decides for every cell: where it is written, whether it resumes, who stages its scenes.

@@ -14,8 +14,8 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.eval import planned_evaluation
 from lerobot_contrast.extras import require_extra
 from lerobot_contrast.record.journal import read_journal
-from lerobot_contrast.run.config import ConfigError
-from lerobot_contrast.run.flags import parse_config, usage_text, wants_help
+from lerobot_contrast.spine.config import ConfigError
+from lerobot_contrast.spine.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.sweep.cells import Cell, read_sweep_file, sweep_cells, sweep_file_path
 from lerobot_contrast.sweep.settings import SweepConfig as SweepConfig  # where the scripts import it
 

@@ -22,9 +22,9 @@ from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.record.shared_episodes import FOLDER, SharedEpisodes, weights_digest
 from lerobot_contrast.record.sweep_dir import is_complete
-from lerobot_contrast.run.build import make_robot, register_robots
-from lerobot_contrast.run.config import EvalConfig, config_json
-from lerobot_contrast.run.evaluation import run
+from lerobot_contrast.spine.build import make_robot, register_robots
+from lerobot_contrast.spine.config import EvalConfig, config_json
+from lerobot_contrast.spine.evaluation import run
 from lerobot_contrast.sweep.carry import Carry, local_run_dir, pack
 from lerobot_contrast.sweep.cells import policy_shares_episodes
 

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.extras import require_extra
-from lerobot_contrast.run.flags import parse_config, usage_text, wants_help
+from lerobot_contrast.spine.flags import parse_config, usage_text, wants_help
 from lerobot_contrast.twin.process import TwinConfig
 
 USAGE = "python -m lerobot_contrast.twin [--flag=value | --flag value] ..."

@@ -18,7 +18,7 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Scene
-from lerobot_contrast.run.flags import ScriptParser
+from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.twin.console_session import run_answered
 from lerobot_contrast.twin.fates import ENDED, held_line
 from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient
@@ -66,12 +66,12 @@ class Plan:
     """The run's trials as the evaluator plans them, to know each trial's goal (read from the same flags)."""
 
     def __init__(self, eval_argv: Sequence[str]):
-        from lerobot_contrast.run.build import check_robot_type, register_robots
-        from lerobot_contrast.run.config import EvalConfig, resume_args
-        from lerobot_contrast.run.evaluation import preview
-        from lerobot_contrast.run.flags import bool_flags, join_values, parse_config
-        from lerobot_contrast.run.run_setup import planned_evaluation
         from lerobot_contrast.so101.scene import start_poses
+        from lerobot_contrast.spine.build import check_robot_type, register_robots
+        from lerobot_contrast.spine.config import EvalConfig, resume_args
+        from lerobot_contrast.spine.evaluation import preview
+        from lerobot_contrast.spine.flags import bool_flags, join_values, parse_config
+        from lerobot_contrast.spine.run_setup import planned_evaluation
 
         argv = join_values(list(eval_argv), bool_flags(EvalConfig))
         check_robot_type(argv, register_robots())

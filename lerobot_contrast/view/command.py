@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.run.flags import ConfigError, parse_config, usage_text, wants_help
+from lerobot_contrast.spine.flags import ConfigError, parse_config, usage_text, wants_help
 
 USAGE = "python -m lerobot_contrast.view RUN_DIR [RUN_DIR ...] [--flag=value | --flag value] ..."
 DEFAULT_PORT = 7576

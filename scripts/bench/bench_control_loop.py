@@ -23,7 +23,7 @@ from lerobot_contrast.domains.language_table.config_language_table_sim import La
 from lerobot_contrast.domains.language_table.language_table_sim import LanguageTableSim
 from lerobot_contrast.policies.pretrained import PretrainedPolicy, save_fresh_policy
 from lerobot_contrast.record.observer import QuietObserver
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.runner import RobotRunner
 
 SMALL_ACT = {
     "dim_model": 128,

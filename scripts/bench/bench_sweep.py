@@ -25,7 +25,7 @@ import ray
 import yaml
 from rich.console import Console
 
-from lerobot_contrast.run.build import register_robots
+from lerobot_contrast.spine.build import register_robots
 from lerobot_contrast.sweep.carry import pack, unpack
 from lerobot_contrast.sweep.cells import read_sweep_file, sweep_cells
 from lerobot_contrast.sweep.cluster import quiet_notes

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.run.flags import ScriptParser
+from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.twin.console_session import run_answered
 from lerobot_contrast.twin.launch import running_twin
 from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan

@@ -21,9 +21,9 @@ from lerobot_contrast.eval import connect, equipped, planned_evaluation
 from lerobot_contrast.policies import make_policy
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.record.observer import EpisodeFiles, QuietObserver
-from lerobot_contrast.run.build import make_robot, register_robots
-from lerobot_contrast.run.config import EvalConfig
-from lerobot_contrast.run.evaluation import run
+from lerobot_contrast.spine.build import make_robot, register_robots
+from lerobot_contrast.spine.config import EvalConfig
+from lerobot_contrast.spine.evaluation import run
 
 WARM_UP = 5  # trials before the first sample: the first episodes load codecs and create the dataset
 

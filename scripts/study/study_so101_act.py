@@ -31,7 +31,7 @@ import sys
 import time
 from pathlib import Path
 
-from lerobot_contrast.run.flags import ScriptParser
+from lerobot_contrast.spine.flags import ScriptParser
 
 POLICIES = ("act", "demonstrator", "ab")
 

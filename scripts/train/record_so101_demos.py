@@ -29,7 +29,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from lerobot_contrast.run.flags import ScriptParser
+from lerobot_contrast.spine.flags import ScriptParser
 
 REPO_ID = "local/so101_demos"
 

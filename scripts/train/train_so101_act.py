@@ -19,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-from lerobot_contrast.run.flags import ScriptParser
+from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.training import act_recipe
 
 REPO_ID = "local/so101_demos"

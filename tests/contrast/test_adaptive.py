@@ -14,8 +14,8 @@ from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.strategy import PlannedTrial
 from lerobot_contrast.contrast.trial import Outcome, TrialContext, TrialRecord
 from lerobot_contrast.eval import planned_evaluation
-from lerobot_contrast.run.config import EvalConfig
-from lerobot_contrast.run.evaluation import run
+from lerobot_contrast.spine.config import EvalConfig
+from lerobot_contrast.spine.evaluation import run
 
 
 def chain_plan(bases, perturbations=("A", "B")):

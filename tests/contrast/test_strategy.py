@@ -7,8 +7,8 @@ from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.strategy import make_plan
 from lerobot_contrast.contrast.trial import Outcome
-from lerobot_contrast.run.evaluation import BudgetError, Evaluation, assume_unchanged, check_budget
-from lerobot_contrast.run.evaluation import run as run_evaluation
+from lerobot_contrast.spine.evaluation import BudgetError, Evaluation, assume_unchanged, check_budget
+from lerobot_contrast.spine.evaluation import run as run_evaluation
 
 from .toy_task import ToyTask
 

@@ -33,9 +33,9 @@ def connected_arm(twin, table):
     from lerobot_contrast.operators.arm import ArmOperator
     from lerobot_contrast.operators.arm_args import ArmArgs
     from lerobot_contrast.operators.arm_memory import ArmMemory
-    from lerobot_contrast.run.build import make_robot, register_robots
-    from lerobot_contrast.run.config import EvalConfig
-    from lerobot_contrast.run.flags import parse_config
+    from lerobot_contrast.spine.build import make_robot, register_robots
+    from lerobot_contrast.spine.config import EvalConfig
+    from lerobot_contrast.spine.flags import parse_config
     from lerobot_contrast.staging.setup import make_bench
 
     register_robots()

@@ -111,8 +111,8 @@ def test_an_option_a_policy_does_not_take_is_refused_in_one_line():
 
 
 def test_policy_options_parse_from_the_command_line():
-    from lerobot_contrast.run.config import EvalConfig
-    from lerobot_contrast.run.flags import parse_config
+    from lerobot_contrast.spine.config import EvalConfig
+    from lerobot_contrast.spine.flags import parse_config
 
     config = parse_config(
         EvalConfig, ["--policy.type=so101_demonstrator", "--policy.options={placement: tcp://127.0.0.1:5557}"]

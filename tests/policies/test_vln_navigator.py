@@ -20,7 +20,7 @@ from lerobot_contrast.domains.vln.config_vln_sim import VLNSimConfig
 from lerobot_contrast.domains.vln.vln_sim import VLNSim
 from lerobot_contrast.policies import POLICIES, policy_entry
 from lerobot_contrast.policies.pretrained import PolicyLoadError, PretrainedPolicy
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.runner import RobotRunner
 from tests.policies.test_route_follower import context_for
 from tests.robots.locobot_helpers import FREE_PORTS, client_config
 

@@ -22,9 +22,9 @@ from lerobot_contrast.eval import equipped, planned_evaluation
 from lerobot_contrast.operators.base import SessionStopped
 from lerobot_contrast.operators.console import Answers, OperatorConsole
 from lerobot_contrast.policies import make_policy
-from lerobot_contrast.run.config import EvalConfig
-from lerobot_contrast.run.evaluation import run
-from lerobot_contrast.run.flags import parse_config
+from lerobot_contrast.spine.config import EvalConfig
+from lerobot_contrast.spine.evaluation import run
+from lerobot_contrast.spine.flags import parse_config
 from lerobot_contrast.staging import homography, locate, overlay
 from lerobot_contrast.staging.check import MEMORY, Bench
 from lerobot_contrast.staging.setup import geometry

@@ -7,12 +7,13 @@ import sys
 
 import pytest
 
+from lerobot_contrast.ports import free_port
 from lerobot_contrast.so101 import arm
 from lerobot_contrast.twin.bus_server import BusServer
 from lerobot_contrast.twin.calibration_file import write_calibration_file
 from lerobot_contrast.twin.faults import FaultsConfig
 from lerobot_contrast.twin.servos import ServoBank
-from tests.twin.test_eval_on_twin import Twin, free_port, operator, save_so101_act
+from tests.twin.test_eval_on_twin import Twin, operator, save_so101_act
 
 
 @pytest.fixture

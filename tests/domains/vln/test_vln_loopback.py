@@ -14,7 +14,7 @@ from lerobot_contrast.contrast.staging import SceneIO
 from lerobot_contrast.domains.vln import VLNTask
 from lerobot_contrast.eval import main
 from lerobot_contrast.policies.route_follower import RouteFollower
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.runner import RobotRunner
 from tests.policies.test_route_follower import context_for
 from tests.robots.locobot_helpers import FREE_PORTS, client_config
 
@@ -97,7 +97,7 @@ def test_a_host_that_dies_mid_trial_is_given_up_in_seconds_and_said_aborted(tmp_
 
 
 def test_an_unreachable_robot_is_one_line_and_leaves_no_run_directory(tmp_path, capsys):
-    from tests.robots.locobot_helpers import free_port
+    from lerobot_contrast.ports import free_port
 
     port = free_port()
     flags = ["--task=vln_paper", "--robot.type=locobot", f"--robot.port_rpc={port}", f"--robot.port_command={port}",

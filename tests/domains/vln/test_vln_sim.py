@@ -16,7 +16,7 @@ from lerobot_contrast.domains.vln.config_vln_sim import VLNSimConfig
 from lerobot_contrast.domains.vln.vln_sim import VLNSim
 from lerobot_contrast.eval import main as eval_main
 from lerobot_contrast.policies.route_follower import RouteFollower
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.runner import RobotRunner
 from tests.policies.test_route_follower import context_for
 
 TASK = VLNTask()

@@ -15,7 +15,7 @@ from lerobot_contrast.operators.channel import Channel
 from lerobot_contrast.operators.console import Answers, OperatorConsole
 from lerobot_contrast.policies import policy_entry
 from lerobot_contrast.record.observer import EpisodeObserver
-from lerobot_contrast.run.config import ConfigError, EvalConfig
+from lerobot_contrast.spine.config import ConfigError, EvalConfig
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot

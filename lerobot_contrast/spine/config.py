@@ -11,7 +11,7 @@ import draccus
 
 from lerobot_contrast.operators.arm_args import ArmArgs
 from lerobot_contrast.policies.base import PolicyArgs
-from lerobot_contrast.run.flags import ConfigError as ConfigError  # where the commands catch it
+from lerobot_contrast.spine.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.staging.args import StagingArgs
 
 

@@ -32,7 +32,7 @@ from lerobot_contrast.record.results import write_results
 from lerobot_contrast.record.run_dir import RunDir, disk_full_said, open_run_dir
 from lerobot_contrast.record.summary import summarize
 from lerobot_contrast.record.third_party import third_party_output
-from lerobot_contrast.run.runner import RobotRunner
+from lerobot_contrast.spine.runner import RobotRunner
 from lerobot_contrast.terminal.lines import trial_line
 
 if TYPE_CHECKING:

@@ -7,7 +7,7 @@ import sys
 from collections.abc import Callable
 
 from lerobot_contrast.operators.base import SessionStopped
-from lerobot_contrast.run.runner import RobotLostError
+from lerobot_contrast.spine.runner import RobotLostError
 
 ENDED_EARLY = (KeyboardInterrupt, SessionStopped, RobotLostError)
 

@@ -21,18 +21,18 @@ from lerobot_contrast.operators.base import Operator
 from lerobot_contrast.policies import Policy, default_policy, make_policy
 from lerobot_contrast.record.compare_run import compare_rule
 from lerobot_contrast.record.plan_file import PLAN_SETTINGS, check_same_plan
-from lerobot_contrast.run.build import (
+from lerobot_contrast.spine.build import (
     OPERATORS,
     make_observers,
     run_fps,
 )
-from lerobot_contrast.run.config import ConfigError, EvalConfig, config_json
+from lerobot_contrast.spine.config import ConfigError, EvalConfig, config_json
 from lerobot_contrast.terminal.lines import plan_lines
 
 if TYPE_CHECKING:
     from lerobot.robots import Robot
 
-    from lerobot_contrast.run.evaluation import Evaluation
+    from lerobot_contrast.spine.evaluation import Evaluation
 
 
 # Base instances times repeats one run may plan: beyond this, planning alone takes minutes and gigabytes.
@@ -127,7 +127,7 @@ def default_output_dir(cfg: EvalConfig, task: Task) -> Path:
 
 
 def dry_run(evaluation: Evaluation) -> None:
-    from lerobot_contrast.run.evaluation import preview
+    from lerobot_contrast.spine.evaluation import preview
 
     records, unit = preview(evaluation), evaluation.cost_model.unit
     print("\n".join(plan_lines(records, evaluation.task.storage_scene(), evaluation.cost_model)))
@@ -169,7 +169,7 @@ def connect(robot: Robot) -> None:
 def planned_evaluation(cfg: EvalConfig) -> Evaluation:
     """The checked plan as an Evaluation with no robot, policy or run directory attached yet."""
     # The spine loads its runner, which loads LeRobot and torch: only once the flags are known to be sound.
-    from lerobot_contrast.run.evaluation import Evaluation, check_budget
+    from lerobot_contrast.spine.evaluation import Evaluation, check_budget
 
     source = adopt_plan(cfg) if cfg.plan else None
     validate(cfg)
