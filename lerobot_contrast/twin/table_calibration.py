@@ -16,6 +16,7 @@ from lerobot_contrast.twin.launch import RunningTwin
 from lerobot_contrast.twin.placement_client import PlacementClient
 
 BOARD = {"x": 0.30, "y": 0.0, "yaw_deg": 0.0}  # over the workspace's middle, where the board covers most of it
+CONNECT_TRIES = 3
 
 
 def calibrate_table(twin: RunningTwin, task: str, output: Path) -> Path:
@@ -28,7 +29,10 @@ def calibrate_table(twin: RunningTwin, task: str, output: Path) -> Path:
     board = [f"--board.{key}={value}" for key, value in BOARD.items()]
     command = [sys.executable, "-m", "lerobot_contrast.calibrate", f"--task={task}", *board, f"--output={output}",
                *shlex.split(twin.robot_flags)]  # fmt: skip
-    done = subprocess.run(command, capture_output=True, text=True)
+    for _ in range(CONNECT_TRIES):  # a loaded machine's pty bus may miss the first status packet of a connect
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode == 0 or "cannot connect" not in done.stderr:
+            break
     placement.ask({"cmd": "remove_board"})
     for name, (x, y, _, yaw) in before.items():
         placement.place(name, x, y, yaw)
