@@ -23,6 +23,8 @@ def subgoal_progress(subgoals_reached: int, n_subgoals: int) -> float:
 
 
 METRICS = ("success", "spl", "progress")
+# How reports, figures and the viewer name each metric.
+METRIC_NAMES = {"spl": "SPL", "success": "success rate", "progress": "subgoal progress"}
 
 
 def score(outcome: Outcome) -> dict[str, bool | float | None]:

@@ -10,13 +10,12 @@ from typing import Any
 
 import pandas as pd
 
-from lerobot_contrast.contrast.metrics import METRICS
+from lerobot_contrast.contrast.metrics import METRIC_NAMES, METRICS
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.pairing.pair_dir import read_index
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.analysis import rng
-from lerobot_contrast.reporting.figures import METRIC_NAMES
 from lerobot_contrast.reporting.markdown import fmt, num, table
 
 

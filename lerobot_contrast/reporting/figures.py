@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from lerobot_contrast.contrast.metrics import METRIC_NAMES
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.analysis import VersusFull
 
-METRIC_NAMES = {"spl": "SPL", "success": "success rate", "progress": "subgoal progress"}
 COLORS = [f"C{k}" for k in range(10)]
 
 

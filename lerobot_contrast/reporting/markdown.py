@@ -5,11 +5,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from lerobot_contrast.contrast.metrics import METRICS
+from lerobot_contrast.contrast.metrics import METRIC_NAMES, METRICS
 from lerobot_contrast.contrast.perturbation import perturbation_label
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.analysis import Comparison, SummaryRow, VersusFull
-from lerobot_contrast.reporting.figures import METRIC_NAMES
 from lerobot_contrast.reporting.runs import Run
 
 METHODS = {

@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from lerobot_contrast.contrast.metrics import METRIC_NAMES
 from lerobot_contrast.reporting import analysis, markdown
-from lerobot_contrast.reporting.figures import METRIC_NAMES
 from lerobot_contrast.reporting.runs import Group, Run, group_runs, policy_pairs
 
 
