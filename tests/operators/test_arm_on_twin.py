@@ -3,6 +3,7 @@ calibrated from the printed board. The camera locates a cube in a bin and one he
 with the twin's placement socket closed (nothing reads the truth) and, killed while the arm stages, resumes with
 nothing lost and nothing counted twice."""
 
+import io
 import json
 import shlex
 import signal
@@ -12,6 +13,7 @@ import time
 
 import numpy as np
 import pytest
+from rich.console import Console
 
 from lerobot_contrast.domains import load_task
 from lerobot_contrast.twin.launch import running_twin
@@ -33,6 +35,7 @@ def connected_arm(twin, table):
     from lerobot_contrast.operators.arm import ArmOperator
     from lerobot_contrast.operators.arm_args import ArmArgs
     from lerobot_contrast.operators.arm_memory import ArmMemory
+    from lerobot_contrast.operators.console import Answers, OperatorConsole
     from lerobot_contrast.spine.build import make_robot, register_robots
     from lerobot_contrast.spine.config import EvalConfig
     from lerobot_contrast.spine.flags import parse_config
@@ -42,10 +45,18 @@ def connected_arm(twin, table):
     flags = ["--task=so101_blocks", *shlex.split(twin.robot_flags), f"--staging.calibration={table}"]
     cfg = parse_config(EvalConfig, [*flags, "--staging.viewer=none"])
     robot = make_robot(cfg)
-    robot.connect()
+    for attempt in range(3):  # a loaded machine's pty bus may miss a status packet while connecting
+        try:
+            robot.connect()
+            break
+        except ConnectionError:
+            if attempt == 2:
+                raise
+            robot.bus.disconnect(disable_torque=False)
     task = load_task("so101_blocks")
     camera = make_bench(cfg.staging, cfg.task, task, robot, "distance", lambda: None)
-    return robot, ArmOperator(robot, task, camera, None, ArmArgs(), ArmMemory(lambda: None))
+    person = OperatorConsole(Answers(io.StringIO("")), Console(file=io.StringIO()))  # nobody at the bench
+    return robot, ArmOperator(robot, task, camera, person, ArmArgs(), ArmMemory(lambda: None))
 
 
 def test_the_camera_sees_a_cube_in_a_bin_and_one_held_in_the_gripper(bench):
