@@ -106,7 +106,9 @@ class OperatorConsole:
         """Show the trial and what to move for it; returns each object to move and its target (None: off the
         workspace)."""
         self._trial = {"trial": context.index, "instruction": context.instance.instruction}
-        return self._show_trial(context)
+        moves = self._show_trial(context)
+        self._send(event="trial", of=context.planned_trials, moves=moves, **self._trial)
+        return moves
 
     def scene_after(self, robot: Any, staged: Scene, staging: Staging) -> Scene:
         if staging.measured is None or self.bench is None:

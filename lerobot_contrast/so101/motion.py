@@ -17,6 +17,8 @@ from lerobot_contrast.so101 import arm, reach
 
 STEP_HZ = 30.0  # goals sent this often while moving: LeRobot's own teleoperation rate
 SETTLE_S = 0.3  # after the last goal, the servos close the rest of the way
+# Folded as at rest, turned to the side: at rest the jaws hang over the workspace's near edge, hiding what lies there.
+ASIDE = {**arm.REST, "shoulder_pan": math.radians(100)}
 READ_RETRIES = 3  # a status packet lost on a busy bus is asked for again before the arm counts as gone
 
 
@@ -91,7 +93,8 @@ class ArmMotion:
         self.follow([reach.Waypoint("rest", goals, 1.5)])
 
     def open_and_withdraw(self) -> None:
-        """Let go of whatever the jaws hold, lift away from it, and go to rest (after an episode, before looking)."""
+        """Let go of whatever the jaws hold, lift away from it, and fold aside, out of the camera's view of the
+        workspace (after an episode, and before staging: the camera looks then)."""
         here = self.joints()
         x, y, z = self.jaws(0.0, here)
         opened = {**here, arm.GRIPPER: reach.OPEN}
@@ -104,4 +107,4 @@ class ArmMotion:
             ]
         except reach.Unreachable:  # straight up is out of reach here: open and go back as it can
             steps = [reach.Waypoint("open", opened, 0.5)]
-        self.follow([*steps, reach.Waypoint("rest", {**arm.REST, arm.GRIPPER: reach.OPEN}, 1.5)])
+        self.follow([*steps, reach.Waypoint("aside", {**ASIDE, arm.GRIPPER: reach.OPEN}, 2.0)])

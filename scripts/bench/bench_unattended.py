@@ -44,7 +44,7 @@ class Judge(Operator):
 
     def handle(self, message: dict) -> str | None:
         kind = message.get("prompt") or message.get("event")
-        if kind == "stage":
+        if kind == "trial":
             self.index, self.instruction = message["trial"], message["instruction"]
         if kind in ("call", "label"):
             self.person[message["trial"]] += 1
@@ -57,7 +57,7 @@ class Judge(Operator):
 
     def _placed(self) -> None:
         instance = self.plan.instances.get(self.index)
-        truth = self.placement.scene()
+        truth, self.resting = self.placement.look()  # heights as staged: a cube lifted later is held
         for name, target in ({} if instance is None else instance.scene.objects).items():
             if name in truth.objects and self.plan.task.spec.workspace.area.contains(target.x, target.y):
                 self.placement_m.append(truth.objects[name].distance_to(target))
