@@ -24,14 +24,13 @@ from lerobot_contrast.operators.arm_args import ArmArgs
 from lerobot_contrast.operators.arm_memory import ArmMemory, Spent
 from lerobot_contrast.operators.base import Label, SessionStopped, Staging
 from lerobot_contrast.operators.verdict import verdict
-from lerobot_contrast.so101 import arm, plan, reach
+from lerobot_contrast.so101 import plan, reach
 from lerobot_contrast.so101.motion import ArmMotion, Stopped
 from lerobot_contrast.staging import seeing
 from lerobot_contrast.staging.check import Bench
 
 AIM_NEAR_M = 0.08  # earlier placements this near a target tell how the arm misses there
 AIM_MAX_M = 0.03  # the most a target is corrected by: a larger miss is a fault to redo, not a bias
-HOLD_BAND = 0.1  # rad: a gripper this near its angle around an object holds one (closed on nothing, it goes 0.25 past)
 
 
 class ArmOperator:
@@ -43,7 +42,6 @@ class ArmOperator:
         self.robot, self.task, self.camera, self.person, self.args = robot, task, camera, person, args
         self.motion = ArmMotion(robot, plan.arm_model(task.spec), args.pace, self._stop_pressed)
         self.size = camera.geometry.size
-        self.grip = reach.jaw_angle(self.motion.model, self.size)  # the gripper's angle around a held object
         self.memory = memory
         self.context: TrialContext | None = None
         self.after: seeing.View | None = None
@@ -218,12 +216,8 @@ class ArmOperator:
         image = self.camera.frame(self.robot)
         if image is None:
             raise CameraLost()
-        jaws = self.motion.jaws(self.size, joints) if self._holding(joints) else None
+        jaws = self.motion.jaws(self.size, joints) if self.motion.holding(joints) else None
         return seeing.look(image, self.camera.calibration, self.camera.geometry, jaws, self.motion.links(joints))
-
-    def _holding(self, joints: Mapping[str, float]) -> bool:
-        """Whether the jaws stopped closing where an object of the task's size holds them apart."""
-        return abs(joints[arm.GRIPPER] - self.grip) < HOLD_BAND
 
     def _stop_pressed(self) -> bool:
         return self.person.take_key() == "estop"

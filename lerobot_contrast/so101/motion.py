@@ -19,7 +19,8 @@ STEP_HZ = 30.0  # goals sent this often while moving: LeRobot's own teleoperatio
 SETTLE_S = 0.3  # after the last goal, the servos close the rest of the way
 # Folded as at rest, turned to the side: at rest the jaws hang over the workspace's near edge, hiding what lies there.
 ASIDE = {**arm.REST, "shoulder_pan": math.radians(100)}
-READ_RETRIES = 3  # a status packet lost on a busy bus is asked for again before the arm counts as gone
+READ_RETRIES = 3
+HOLD_GAP = 0.02  # rad: a closed gripper this far short of its goal is held open by an object  # a status packet lost on a busy bus is asked for again before the arm counts as gone
 
 
 class Stopped(UserError):
@@ -34,6 +35,7 @@ class ArmMotion:
         self.robot, self.model, self.pace, self.stop = robot, model, pace, stop
         self.data = mujoco.MjData(model)
         self.moving_s = 0.0  # seconds spent moving, all told
+        self.goal: dict[str, float] = {}  # the joint goals last sent (radians)
 
     def joints(self) -> dict[str, float]:
         """The arm's joint angles (radians), read from its servos."""
@@ -49,6 +51,12 @@ class ArmMotion:
         site = self.data.site(reach.SITE)
         where = site.xpos + site.xmat.reshape(3, 3) @ reach.grasp_point(self.model, size)
         return float(where[0]), float(where[1]), float(where[2])
+
+    def holding(self, joints: Mapping[str, float]) -> bool:
+        """Whether the jaws hold something: told to close, they stopped short of where they were told to go (a
+        servo blocked by what it grips reads off its goal, whatever its calibration's offset)."""
+        goal = self.goal.get(arm.GRIPPER)
+        return goal is not None and goal < reach.OPEN / 2 and joints[arm.GRIPPER] - goal > HOLD_GAP
 
     def links(self, joints: Mapping[str, float] | None = None, per_link: int = 4) -> np.ndarray:
         """Points (N, 3) covering the arm, its base to its jaws: every part's centre and `per_link` points along each
@@ -84,6 +92,7 @@ class ArmMotion:
             share = 0.5 - 0.5 * math.cos(math.pi * step / steps)  # ease in and out: no jerk at either end
             angles = {name: start[name] + share * (goal[name] - start[name]) for name in goal}
             self.robot.send_action(arm.lerobot_action(angles))
+            self.goal = angles
             time.sleep(max(0.0, 1.0 / STEP_HZ - (time.monotonic() - tick)))
             self.moving_s += 1.0 / STEP_HZ
 

@@ -65,10 +65,13 @@ def look(
     links, whose image is masked out (an arm of an object's colour is not that object)."""
     if image is None:
         return View({}, tuple(geometry.colours))
+    size = geometry.size
+    holding = jaws is not None and jaws[2] > HELD_ABOVE * size
+    held = (
+        _held(image, calibration, geometry, jaws, arm) if holding else {}
+    )  # before the arm (and what it holds) is masked
     if arm is not None and len(arm):
         image = _without_arm(image, calibration, arm)
-    size = geometry.size
-    held = _held(image, calibration, geometry, jaws) if jaws is not None and jaws[2] > HELD_ABOVE * size else {}
     table = locate.find_objects(image, calibration, geometry.colours, geometry.bounds, size)
     seen: dict[str, Sighting] = dict(held)
     for name, (x, y) in table.items():
@@ -88,18 +91,23 @@ def _without_arm(image: np.ndarray, calibration: CameraCalibration, arm: np.ndar
     return masked
 
 
-def _held(image, calibration: CameraCalibration, geometry: BenchGeometry, jaws) -> dict[str, Sighting]:
-    """Objects whose colour shows right at the jaws' image: held there."""
+def _held(image, calibration: CameraCalibration, geometry: BenchGeometry, jaws, arm) -> dict[str, Sighting]:
+    """The object whose colour shows most at the jaws' image: held there. A colour that also shows at the arm's
+    shoulder is the arm's own, not an object's."""
     x, y, z = jaws
-    column, row = calibration.lift(np.array([[x, y]]), z)[0]
-    found = {}
+    at_jaws = calibration.lift(np.array([[x, y]]), z)[0]
+    at_shoulder = None if arm is None or not len(arm) else calibration.lift(arm[:1, :2], arm[0, 2])[0]
+    counts = {}
     for name, colour in geometry.colours.items():
-        mask = locate.colour_mask(image, colour)
-        rows, columns = np.nonzero(mask)
-        near = np.hypot(columns - column, rows - row) < HELD_PX
-        if near.sum() >= locate.MIN_PIXELS:
-            found[name] = Sighting(x, y, z, None, held=True)
-    return found
+        rows, columns = np.nonzero(locate.colour_mask(image, colour))
+        pixels = np.column_stack([columns, rows])
+        if at_shoulder is not None and (np.hypot(*(pixels - at_shoulder).T) < HELD_PX).sum() >= locate.MIN_PIXELS:
+            continue
+        counts[name] = int((np.hypot(*(pixels - at_jaws).T) < HELD_PX).sum())
+    best = max(counts, key=counts.get, default=None)
+    if best is None or counts[best] < locate.MIN_PIXELS:
+        return {}
+    return {best: Sighting(x, y, z, None, held=True)}
 
 
 def cube_yaw(
