@@ -31,6 +31,8 @@ from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementErr
 from lerobot_contrast.twin.placement_client import PlacementClient
 from lerobot_contrast.twin.table_calibration import calibrate_table
 
+RESUMES = 3
+
 
 class Judge(Operator):
     """The scripted person (called only by the arm's bell) and the judge: where the arm put each object when the
@@ -67,6 +69,11 @@ class Judge(Operator):
         scene, heights = self.placement.look()
         lifted = {name for name, z in heights.items() if z - self.resting.get(name, z) > 0.02}
         self.labels[self.index] = (success, self.plan.judge(self.index, self.instruction, scene, lifted), sure)
+
+
+def complete(run_dir: Path) -> bool:
+    summary = run_dir / "summary.json"
+    return summary.is_file() and bool(json.loads(summary.read_text()).get("complete"))
 
 
 def figures(judge: Judge, run_dir: Path, hours: float) -> dict[str, str]:
@@ -131,6 +138,11 @@ def main(argv: list[str] | None = None) -> int:
             judge = Judge(Plan(eval_argv), PlacementClient(twin.placement), PlacementError(), args.seed, "accept")
             started = time.monotonic()
             code = run_answered(eval_argv, judge, (OperatorError,))
+            for _ in range(RESUMES):  # a bus that stops answering on a loaded machine ends the session resumably
+                if complete(run_dir):
+                    break
+                print(f"bench_unattended: the session stopped early; resuming {run_dir}", flush=True)
+                code = run_answered([*eval_argv, "--resume=true"], judge, (OperatorError,))
             hours = (time.monotonic() - started) / 3600
         said = figures(judge, run_dir, hours)
     except (UserError, OperatorError) as error:
