@@ -121,7 +121,8 @@ def main(argv: list[str] | None = None) -> int:
             check_names(argv, flag_names(EvalConfig), robots=False)
         check_robot_type(argv, register_robots())
         if wants_help(argv):
-            print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv)))
+            arm = "--operator=arm" in argv  # join_values made `--operator arm` one argument
+            print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv), arm))
             return 0
         return plan_and_run(parse_config(EvalConfig, resume_args(argv)), robot_type(argv))
     except UserError as error:

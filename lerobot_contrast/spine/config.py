@@ -74,8 +74,8 @@ class EvalConfig:
     # Experimenter-cost budget K in the cost model's unit; the run stops once the cumulative cost exceeds
     # it (default: no limit).
     budget: float | None = None
-    # Cost model: distance (metres objects are moved), reset_time (modelled seconds of restaging), or measured
-    # (metres moved as a calibrated camera measured them; planned like distance).
+    # Cost model: distance (metres moved), reset_time (seconds of restaging), measured (metres a calibrated camera
+    # saw moved), robot_time or interventions (--operator=arm: the arm's seconds, a person's calls).
     cost: str = "distance"
     # Seed of every random choice: the same seed gives the same plan and, in simulation, the same results.
     seed: int = 0
@@ -95,13 +95,10 @@ class EvalConfig:
     robot: robots.RobotConfig | None = None
     # Control rate in Hz; default: 10 on hardware, as fast as possible on a simulated robot.
     fps: float | None = None
-    # Who stages scenes and judges outcomes: console (an operator, prompted between trials), arm (an SO-101 stages
-    # each trial itself and its calibrated camera labels it, calling a person only when needed; docs: unattended.md)
-    # or auto (the robot reports and stages its own scene, as in simulation). Default: auto where the robot can,
-    # else console.
+    # Who stages and labels: console (a person), arm (the SO-101 itself, its camera labelling; docs: unattended.md)
+    # or auto (the robot stages its own scene, as in simulation). Default: auto where the robot can, else console.
     operator: str | None = None
-    # With --operator=console: also write each of the console's prompts as one JSON line to this file, FIFO or
-    # /dev/fd/N, for a program that answers the console (the twin's scripted person; docs: unattended.md).
+    # With --operator=console: each prompt also as a JSON line to this file, FIFO or /dev/fd/N, for a program.
     operator_channel: str | None = None
     # Map robot observation keys to the policy's input features, e.g. {"observation.images.top": "observation.images.front"}.
     rename_map: dict[str, str] = field(default_factory=dict)
@@ -122,8 +119,7 @@ class EvalConfig:
     output_dir: Path | None = None
     # Continue the run in --output_dir where it stopped.
     resume: bool = False
-    # With --resume: run again the last trials that a lost robot aborted (false: keep them as aborted and go on
-    # after them, e.g. for a trial that loses the robot every time).
+    # With --resume: run again the trials a lost robot aborted (false: keep them aborted and go on after them).
     rerun_aborted: bool = True
     # Print the plan (trials, what to move before each, planned cost) and exit without running anything.
     dry_run: bool = False

@@ -246,12 +246,16 @@ def flag_lines(cls: type, prefix: str, skip: tuple[str, ...] = ()) -> list[str]:
     return lines
 
 
-def help_text(cls: type, command: str, robot_type: str | None) -> str:
-    """The command's flags in full, then the chosen robot's fields, or the robot types to choose from."""
+def help_text(cls: type, command: str, robot_type: str | None, arm: bool = False) -> str:
+    """The command's flags in full (the arm operator's `--arm.*` only with `arm`), then the chosen robot's fields, or
+    the robot types to choose from."""
     from lerobot.robots import RobotConfig
 
     lines = [f"usage: {command} [--flag=value | --flag value] ...", "", (cls.__doc__ or "").strip(), ""]
-    lines += flag_lines(cls, "", skip=("robot",))
+    hidden = () if arm or "arm" not in {f.name for f in dataclasses.fields(cls)} else ("arm",)
+    lines += flag_lines(cls, "", skip=("robot", *hidden))
+    if hidden:
+        lines += ["  --arm.*", "      How the arm stages and labels: add --operator=arm to --help for these settings."]
     known = sorted(RobotConfig.get_known_choices())
     if robot_type in known:
         lines += ["", f"--robot.type={robot_type} settings:"]

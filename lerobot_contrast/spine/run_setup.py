@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from lerobot_contrast.contrast.cost import CostModel, RobotTimeCost
 from lerobot_contrast.contrast.stopping import StopRule
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
 from lerobot_contrast.contrast.task import Task
@@ -117,7 +118,7 @@ def build_plan(cfg: EvalConfig) -> tuple[Task, list[PlannedTrial]]:
         )
     rng = np.random.default_rng(cfg.seed)
     instances = task.sample(n_instances, rng)
-    cost = task.cost_model(cfg.cost)  # cost_aware order prices staging in the run's own cost model
+    cost = run_cost_model(task, cfg)  # cost_aware order prices staging in the run's own cost model
     return task, make_plan(cfg.strategy, instances, perturbations, cfg.repeats, rng, cfg.order, cost)
 
 
@@ -177,7 +178,7 @@ def planned_evaluation(cfg: EvalConfig) -> Evaluation:
     if source is not None:
         check_same_plan(source, plan)
     planned = Evaluation(
-        task, plan, task.cost_model(cfg.cost), cfg.budget, cfg.seed, stop=stop_rule(cfg, plan),
+        task, plan, run_cost_model(task, cfg), cfg.budget, cfg.seed, stop=stop_rule(cfg, plan),
         adaptive=cfg.order == "adaptive",
     )  # fmt: skip
     check_budget(planned)
@@ -222,3 +223,13 @@ def equipped(
         lane_threads=lane_threads(lanes),
         policy_for=lambda lane_robot: make_policy(cfg.policy, lane_robot, planned.task, cfg.rename_map),
     )
+
+
+def run_cost_model(task: Task, cfg: EvalConfig) -> CostModel:
+    """The task's `--cost` model; robot time planned as one pick and place per moved object at the arm's --arm.pace."""
+    cost = task.cost_model(cfg.cost)
+    if isinstance(cost, RobotTimeCost):
+        from lerobot_contrast.so101 import PICK_AND_PLACE_S
+
+        cost = dataclasses.replace(cost, per_object_s=PICK_AND_PLACE_S * cfg.arm.pace)
+    return cost

@@ -10,9 +10,8 @@ from pathlib import Path
 class StagingArgs:
     """Staging with a calibrated camera (operator console only): targets shown in Rerun, placements measured."""
 
-    # Table calibration from python -m lerobot_contrast.calibrate (default, used when it exists: <task>.calibration.json
-    # beside a task file, or for a shipped example where calibrate writes it, in LeRobot's calibration folder under
-    # tables/). Without one, staging is the console's list of moves alone.
+    # Table calibration from python -m lerobot_contrast.calibrate (default: where calibrate writes it, when it
+    # exists). Without one, staging is the console's list of moves alone.
     calibration: Path | None = None
     # How far (metres) a coloured object may sit from its target before the operator is asked to fix or accept it.
     tolerance: float = 0.02

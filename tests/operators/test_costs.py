@@ -17,8 +17,14 @@ AFTER = Scene({"red_cube": Pose(0.25, 0.0), "green_cube": Pose(0.3, -0.1), "blue
 
 def test_robot_time_is_planned_per_object_the_arm_moves():
     assert RobotTimeCost(per_object_s=10.0)(BEFORE, AFTER) == 20.0
-    planned = load_task("so101_blocks").cost_model("robot_time")
-    assert planned.unit == "s" and planned.per_object_s == pytest.approx(PICK_AND_PLACE_S * ArmArgs().pace)
+    from lerobot_contrast.spine.config import EvalConfig
+    from lerobot_contrast.spine.flags import parse_config
+    from lerobot_contrast.spine.run_setup import run_cost_model
+
+    cfg = parse_config(EvalConfig, ["--task=so101_blocks", "--cost=robot_time", "--arm.pace=2"])
+    planned = run_cost_model(load_task("so101_blocks"), cfg)  # at the pace the arm stages with
+    assert planned.unit == "s" and planned.per_object_s == pytest.approx(PICK_AND_PLACE_S * 2)
+    assert ArmArgs().pace != 2
     assert InterventionCost()(BEFORE, AFTER) == 0.0
     assert load_task("so101_blocks").cost_model("interventions").unit == "calls"
 

@@ -26,11 +26,8 @@ def make_cost_model(spec: CostSpec, name: str) -> CostModel:
             tolerance=spec.tolerance,
             handling_s=dict(spec.handling_s),
         )
-    if name == "robot_time":  # the arm's pick and place, at the pace it stages with
-        from lerobot_contrast.operators.arm_args import ArmArgs
-        from lerobot_contrast.so101 import PICK_AND_PLACE_S
-
-        return RobotTimeCost(per_object_s=PICK_AND_PLACE_S * ArmArgs().pace, tolerance=spec.tolerance)
+    if name == "robot_time":  # the seconds per object come from the arm that stages (spine/run_setup.py)
+        return RobotTimeCost(tolerance=spec.tolerance)
     if name == "interventions":
         return InterventionCost()
     raise UserError(f"--cost: unknown cost model {name!r}; choose from: {', '.join(COST_MODELS)}")
