@@ -51,7 +51,14 @@ def test_each_prompt_goes_to_the_channel_as_one_json_line(tmp_path):
     assert label.action == "done" and label.success
     assert operator.aborted("emergency stop").action == "stop"
     messages = [parse(line) for line in path.read_text().splitlines()]
-    assert [m.get("prompt", m.get("event")) for m in messages] == ["trial", "stage", "check", "running", "label", "aborted"]
+    assert [m.get("prompt", m.get("event")) for m in messages] == [
+        "trial",
+        "stage",
+        "check",
+        "running",
+        "label",
+        "aborted",
+    ]
     assert messages[0]["moves"] == messages[1]["moves"]
     messages = messages[1:]
     stage = messages[0]
