@@ -1,6 +1,7 @@
 """Runs to look at: a small contrast run with a dataset (videos), the same plan under a second policy (A/B), and
 the report of both, made once per session by the real commands."""
 
+import json
 import os
 import shutil
 import subprocess
@@ -55,6 +56,18 @@ def copy_of(tmp_path):
         return target
 
     return copy
+
+
+@pytest.fixture
+def in_progress(runs, copy_of) -> tuple[Path, list[str]]:
+    """A copy of the noisy run as it was after 5 trials (summary not complete), and its whole journal's lines."""
+    run = copy_of(runs["noisy"])
+    journal = run / "journal.jsonl"
+    lines = journal.read_text().splitlines(keepends=True)
+    summary = json.loads((run / "summary.json").read_text())
+    (run / "summary.json").write_text(json.dumps({**summary, "complete": False}))
+    journal.write_text("".join(lines[:5]))
+    return run, lines
 
 
 def report_rows(report_md: Path, title: str) -> list[list[str]]:

@@ -137,17 +137,11 @@ def test_a_pair_shows_the_staging_check_where_the_run_measured_it(runs, copy_of,
         assert not driver.find_elements(By.CSS_SELECTOR, f'.column[data-trial="{original}"] .staging')
 
 
-def test_a_run_in_progress_refreshes_as_trials_come_in(runs, copy_of, page_of):
-    import json
-
+def test_a_run_in_progress_refreshes_as_trials_come_in(in_progress, page_of):
     from selenium.webdriver.support.ui import WebDriverWait
 
-    run = copy_of(runs["noisy"])
+    run, lines = in_progress
     journal = run / "journal.jsonl"
-    lines = journal.read_text().splitlines(keepends=True)
-    summary = json.loads((run / "summary.json").read_text())
-    (run / "summary.json").write_text(json.dumps({**summary, "complete": False}))
-    journal.write_text("".join(lines[:5]))
     with chromium() as driver:
         driver.get(page_of(run))
         wait_for(driver, "#overview")
