@@ -1,6 +1,6 @@
 """Time the same simulated evaluation with one lane and with many, in one process, and check that the journals agree
 trial for trial (up to wall-clock fields). Figures last: trials=... wall_1lane_s=... wall_lanes_s=... speedup=...
-identical=true|false.
+identical=true|false (the journals to the last digit) same_outcomes=true|false (each trial's status and success).
 
     .venv/bin/python scripts/bench/bench_lanes.py                      # the default evaluation (the README's first command)
     .venv/bin/python scripts/bench/bench_lanes.py --n_instances=10 --busy   # the lanes alone, then beside busy processes
@@ -143,8 +143,14 @@ def main() -> None:
         f"trials={len(a)} lanes={args.lanes} cpu_1lane_s={one[1]:.1f} "
         f"cpu_lanes_s={many[1]:.1f} cpu_speedup={one[1] / many[1]:.2f} peak_rss_mb={rss_mb:.0f} "
         f"wall_1lane_s={one[0]:.1f} wall_lanes_s={many[0]:.1f} speedup={one[0] / many[0]:.2f} "
-        f"identical={str(a == b).lower()}"
+        f"identical={str(a == b).lower()} same_outcomes={str(outcomes(a) == outcomes(b)).lower()}"
     )
+
+
+def outcomes(rows: list[dict]) -> list[tuple]:
+    """Each trial's status and success: what the lanes promise on any CPU, where its kernels may round a batch's rows
+    otherwise than one row's in the last bits (docs/development.md)."""
+    return [(row["index"], row["status"], row.get("success")) for row in rows]
 
 
 if __name__ == "__main__":

@@ -18,6 +18,8 @@ from lerobot_contrast.training.learner import Learner, closed_loop
 # The shipped weights scored 0.77 on these 30 instances (0.70 through select_action; the check acts through
 # lane_step, as evaluations do); the floor leaves room for platform differences in float math.
 SUCCESS_FLOOR = 0.5
+# Metres of a step: a row batched may round its last bits otherwise (about 1e-8 m measured), never more than this.
+BATCH_ATOL = 1e-6
 
 
 def test_shipped_files_are_small_and_complete():
@@ -51,8 +53,9 @@ def test_shipped_policy_clears_its_success_floor():
 
 
 def test_a_rows_action_does_not_depend_on_its_batch():
-    """Lanes give the journal of one lane: each episode's action is the same to the last bit alone or batched
-    with up to 11 others (two calls of the network past 8 rows)."""
+    """Lanes decide as one lane: each episode's action alone or batched with up to 11 others (two calls of the
+    network past 8 rows) points into the same heading bin and agrees within BATCH_ATOL. Not to the last bit: a CPU's
+    kernels may round a row otherwise in another batch size (AVX-512's do at 6 rows; docs/development.md)."""
     torch.set_num_threads(1)
     policy = TabletopPointerPolicy.from_pretrained(WEIGHTS).eval()
     generator = torch.Generator().manual_seed(0)
@@ -64,7 +67,9 @@ def test_a_rows_action_does_not_depend_on_its_batch():
         batch = {"observation.images.top": images[rows], "observation.state": states[rows], "task": tasks[rows]}
         return policy.lane_step(batch, memories)
 
-    alone = [step(slice(i, i + 1), [{}]) for i in range(12)]
+    alone = torch.cat([step(slice(i, i + 1), [{}]) for i in range(12)])
+    assert alone.abs().max() > 100 * BATCH_ATOL  # the actions are large against the tolerance
     for size in range(2, 13):
         batched = step(slice(0, size), [{} for _ in range(size)])
-        assert torch.equal(batched, torch.cat(alone[:size])), f"a batch of {size} rounds its rows otherwise"
+        assert torch.allclose(batched, alone[:size], rtol=0, atol=BATCH_ATOL), f"a batch of {size} acts otherwise"
+        assert torch.equal(policy.steering.heading_bin(batched), policy.steering.heading_bin(alone[:size]))

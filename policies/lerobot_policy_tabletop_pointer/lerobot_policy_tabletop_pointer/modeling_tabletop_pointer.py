@@ -144,10 +144,11 @@ class TabletopPointerPolicy(PreTrainedPolicy):
     @torch.no_grad()
     def lane_step(self, batch: dict[str, Any], memories: list[dict[str, Tensor]]) -> Tensor:
         """One control step of independent episodes (evaluation lanes): row i's episode memory is `memories[i]`,
-        empty at its episode's start and filled here. A row's action is the same to the last bit in any batch: each
-        instruction is encoded on its own, the networks run on at most LANE_CHUNK rows at a time, and the layers that
-        round a small batch otherwise run on CONTEXT_ROWS or MATMUL_ROWS rows (the last row repeated), which costs
-        one lane little: the convolutions that dominate run on its one image."""
+        empty at its episode's start and filled here. A row's action does not depend on its batch: each instruction is
+        encoded on its own, the networks run on at most LANE_CHUNK rows at a time, and the layers that round a small
+        batch otherwise on AVX2 run on CONTEXT_ROWS or MATMUL_ROWS rows (the last row repeated), which makes it the
+        same to the last bit there and costs one lane little. Other CPUs' kernels may round some batch sizes
+        otherwise in the last bits (docs/speed.md)."""
         for memory, task in zip(memories, batch["task"], strict=True):
             if "text" not in memory:
                 memory["text"] = self.instruction(self.tokenizer([task], batch[STATE_KEY].device))

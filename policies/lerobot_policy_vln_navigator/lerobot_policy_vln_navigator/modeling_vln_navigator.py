@@ -139,9 +139,9 @@ class VLNNavigatorPolicy(PreTrainedPolicy):
         return self._commands(memories, state, self.obstacle_ranges(batch), logits)
 
     def lane_logits(self, image: Tensor) -> Tensor:
-        """The scanner's class logits for lanes' resized images, each row the same to the last bit in any batch: the
-        scanner runs on SCAN_ROWS to LANE_CHUNK rows at a time, the last row repeated (on a GPU, whose kernels are
-        chosen by batch size, always on LANE_CHUNK)."""
+        """The scanner's class logits for lanes' resized images, each row as in any batch (to the last bit on AVX2;
+        other CPUs may round some batch sizes otherwise): the scanner runs on SCAN_ROWS to LANE_CHUNK rows at a time,
+        the last row repeated (on a GPU, whose kernels are chosen by batch size, always on LANE_CHUNK)."""
         rows = LANE_CHUNK if image.device.type != "cpu" else SCAN_ROWS
         chunks = [image[start : start + LANE_CHUNK] for start in range(0, image.shape[0], LANE_CHUNK)]
         return torch.cat([self.scanner.classify(_pad_rows(chunk, rows))[: len(chunk)] for chunk in chunks])
