@@ -45,6 +45,7 @@ class ArmOperator:
         self.memory = memory
         self.context: TrialContext | None = None
         self.after: seeing.View | None = None
+        self.held_at_end: tuple[str, ...] = ()  # what the jaws held when the last episode ended
         self.landings: list[tuple[tuple[float, float], tuple[float, float]]] = []  # (aimed at, seen landing)
         self.calls = 0  # a person called to the bench, all session
         self._trial_calls = 0  # ... while staging this trial
@@ -93,8 +94,12 @@ class ArmOperator:
         self.person.say(text)
 
     def scene_after(self, robot: Any, staged: Scene, staging: Staging) -> Scene:
-        """Let go, withdraw out of view, and look: the scene the trial left, as the camera sees it."""
+        """Look at what the jaws hold where the episode ended them, then let go, withdraw out of view and look again:
+        the scene the trial left, as the camera sees it. An object held when the episode ended was not put down,
+        wherever it falls when the arm lets go."""
+        self.person.note("ended")
         with _link("labelling"):
+            self.held_at_end = tuple(name for name, seen in self._look().seen.items() if seen.held)
             self.motion.open_and_withdraw()
             self.after = self._look()
         return self.after.scene(staged)
@@ -103,10 +108,12 @@ class ArmOperator:
         if early is not None and not subgoals:
             return Label("done", success=early == "success", progress=float(early == "success"))
         instance, view = self.context.instance, self.after
-        held = tuple(name for name, seen in view.seen.items() if seen.held)
+        held = (*self.held_at_end, *(name for name, seen in view.seen.items() if seen.held))
         said = verdict(self.task.is_achieved, instance, view.scene(instance.scene), view.unseen, held,
                        self.args.uncertainty)  # fmt: skip
-        self.person.note("labelled", success=said.success, sure=said.sure)
+        self.person.note("labelled", success=said.success, sure=said.sure, held=list(held))
+        if held:
+            self.say(f"held in the jaws when the episode ended, not put down: {', '.join(held)}")
         if said.sure:
             self.say(f"the camera labels it: {'success' if said.success else 'failure'}")
             return Label("done", success=said.success, progress=float(said.success))
@@ -145,7 +152,8 @@ class ArmOperator:
         for name in self.camera.geometry.colours:
             goal, seen = target.objects.get(name), view.seen.get(name)
             if goal is None and seen is not None:
-                off[name] = None
+                if name not in view.waiting:
+                    off[name] = None
             elif goal is not None and not _inside(goal, self.camera.geometry.bounds):
                 continue  # its place is off the workspace: the camera cannot check it there
             elif goal is not None and (
@@ -163,10 +171,10 @@ class ArmOperator:
             if seen is None:
                 trouble[name] = "not seen"
                 continue
-            if goal is None:
-                trouble[name] = "to take off the workspace, out of the arm's reach"
+            if goal is None and self.camera.geometry.tray is None:
+                trouble[name] = "to take off the workspace, and the task has no tray in the arm's reach"
                 continue
-            aim = self._aim(goal)
+            aim = self._tray_spot(name, view) if goal is None else self._aim(goal)
             try:
                 steps = reach.pick_and_place(self.motion.model, self.motion.joints(), seen.pose(), self.size, aim)
 
@@ -196,6 +204,16 @@ class ArmOperator:
         dy = float(np.mean([aim[1] - landed[1] for aim, landed in near]))
         scale = min(1.0, AIM_MAX_M / max(math.hypot(dx, dy), 1e-9))
         return goal.x + scale * dx, goal.y + scale * dy
+
+    def _tray_spot(self, name: str, view: seeing.View) -> tuple[float, float]:
+        """Where in the tray to put `name` down: the spot furthest from everything else seen there."""
+        (x0, y0), (x1, y1) = self.camera.geometry.tray
+        half = self.size / 2
+        xs = np.linspace(x0 + half, x1 - half, max(2, round((x1 - x0) / self.size)))
+        ys = np.linspace(y0 + half, y1 - half, max(2, round((y1 - y0) / self.size)))
+        others = [(at.x, at.y) for other, at in view.seen.items() if other != name and not at.held]
+        spots = [(float(x), float(y)) for x in xs for y in ys]
+        return max(spots, key=lambda spot: min((math.dist(spot, other) for other in others), default=0.0))
 
     def _call(self, trouble: Mapping[str, str], target: Scene) -> None:
         """Ring for a person to fix `trouble`, and wait for Enter; their time counts as theirs, not the robot's."""

@@ -2,14 +2,16 @@
 answering the console (the twin's scripted person) reads what it asks, never its screen text. Answers still go in as
 a person types them, so a person can take over at any prompt.
 
-    {"version": 1, "event": "trial", "trial": 0, "of": 3, "instruction": "...", "moves": {...}}  (each trial's start)
+    {"version": 1, "event": "trial", "trial": 0, "of": 3, "instruction": "...", "moves": {...}, "instance": {...}}
+        (each trial's start: the instance the evaluator runs, its scene the targets it stages)
     {"version": 1, "prompt": "stage", "trial": 0, "of": 3, "instruction": "...", "moves": {"red_cube": [x, y] | null}}
     {"version": 1, "prompt": "check", "off": {"red_cube": 0.041 | null}, "tolerance": 0.02}
     {"version": 1, "event": "running"}
     {"version": 1, "prompt": "label", "trial": 0, "instruction": "...", "subgoals": [...]}
     {"version": 1, "prompt": "aborted", "reason": "emergency stop"}
     {"version": 1, "prompt": "call", "trial": 0, "trouble": "...", "fix": {"red_cube": [x, y] | null}}  (the arm)
-    {"version": 1, "event": "labelled", "trial": 0, "success": true, "sure": true}  (the arm's own label)
+    {"version": 1, "event": "ended", "trial": 0}  (the arm: the episode ended, before it lets go or moves)
+    {"version": 1, "event": "labelled", "trial": 0, "success": true, "sure": true, "held": []}  (the arm's own label)
 """
 
 from __future__ import annotations

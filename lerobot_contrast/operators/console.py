@@ -107,7 +107,8 @@ class OperatorConsole:
         workspace)."""
         self._trial = {"trial": context.index, "instruction": context.instance.instruction}
         moves = self._show_trial(context)
-        self._send(event="trial", of=context.planned_trials, moves=moves, **self._trial)
+        self._send(event="trial", of=context.planned_trials, moves=moves, instance=context.instance.to_json(),
+                   **self._trial)  # fmt: skip
         return moves
 
     def scene_after(self, robot: Any, staged: Scene, staging: Staging) -> Scene:

@@ -40,10 +40,10 @@ def verdict(
     missing = [name for name in named if name in unseen]
     if missing:
         return Verdict(False, False, f"{', '.join(missing)} not seen")
-    success = achieved(instance, scene) and not any(name in held for name in named)
+    if any(name in held for name in named):  # in the jaws, not put down: a failure wherever it hangs
+        return Verdict(False, True, "")
+    success = achieved(instance, scene)
     for name in named:
-        if name in held:
-            continue
         pose = scene.objects[name]
         for k in range(DIRECTIONS):
             angle = 2 * math.pi * k / DIRECTIONS

@@ -80,17 +80,30 @@ def table_extent(task: TaskSpec) -> tuple[tuple[float, float], tuple[float, floa
 
 def start_poses(task: TaskSpec, scene: Scene | None) -> dict[str, Pose]:
     """Where each object starts: its pose in `scene`, else where it waits (the storage row of the cost model, the
-    spare objects past the row's end), fixed objects where the task file puts them."""
-    parked = dict(storage_scene(task).objects)
+    spare objects in the task's tray, or past the row's end without one), fixed objects where the task file puts
+    them."""
+    parked = dict(storage_scene(task).objects) | tray_slots(task)
     row = [parked[name] for name in task.placed]
     step = (row[-1].x - row[-2].x, row[-1].y - row[-2].y) if len(row) > 1 else (SPARE_GAP, 0.0)
     spares = [name for name, obj in task.objects.items() if obj.spare]
     end = row[-1] if row else Pose(*task.workspace.area.middle)
     scale = SPARE_GAP / max(math.hypot(*step), 1e-9)
     for k, name in enumerate(spares, start=1):
-        parked[name] = Pose(end.x + k * step[0] * scale, end.y + k * step[1] * scale)
+        parked.setdefault(name, Pose(end.x + k * step[0] * scale, end.y + k * step[1] * scale))
     given = {} if scene is None else scene.objects
     return {name: given.get(name, parked[name]) if obj.movable else obj.at for name, obj in task.objects.items()}
+
+
+def tray_slots(task: TaskSpec) -> dict[str, Pose]:
+    """Where each spare object waits in the task's tray (none without one): spread along its longer side."""
+    tray, spares = task.workspace.tray, [name for name, obj in task.objects.items() if obj.spare]
+    if tray is None or not spares:
+        return {}
+    (x0, x1), (y0, y1) = tray.box
+    along = [(k + 0.5) / len(spares) for k in range(len(spares))]
+    if x1 - x0 >= y1 - y0:
+        return {name: Pose(x0 + f * (x1 - x0), (y0 + y1) / 2) for name, f in zip(spares, along, strict=True)}
+    return {name: Pose((x0 + x1) / 2, y0 + f * (y1 - y0)) for name, f in zip(spares, along, strict=True)}
 
 
 def build_spec(task: TaskSpec, scene: Scene | None = None, extras: Iterable[SpecEdit] = ()) -> mujoco.MjSpec:

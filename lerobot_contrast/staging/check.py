@@ -36,6 +36,14 @@ class BenchGeometry:
     bounds: tuple[tuple[float, float], tuple[float, float]]
     colours: Mapping[str, str]
     size: float  # footprint side and height of the objects, metres
+    tray: tuple[tuple[float, float], tuple[float, float]] | None = None  # ((x_min, y_min), (x_max, y_max))
+
+    def waiting(self, x: float, y: float) -> bool:
+        """Whether an object seen at (x, y) waits in the tray: in view, but not on the workspace."""
+        if self.tray is None:
+            return False
+        (x0, y0), (x1, y1) = self.tray
+        return x0 <= x <= x1 and y0 <= y <= y1
 
 
 class Bench:
@@ -67,7 +75,7 @@ class Bench:
         found = locate.find_objects(
             image, self.calibration, self.geometry.colours, self.geometry.bounds, self.geometry.size
         )
-        return {name: Pose(x, y) for name, (x, y) in found.items()}
+        return {name: Pose(x, y) for name, (x, y) in found.items() if not self.geometry.waiting(x, y)}
 
     def stage(self, robot: Any, context: TrialContext, console: Any, place: Callable[[], None] | None) -> Any:
         """Stage `context`'s scene with the operator (`place`: a simulator's stand-in for their hands) and

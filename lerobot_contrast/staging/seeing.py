@@ -43,12 +43,16 @@ class View:
 
     seen: Mapping[str, Sighting]
     unseen: tuple[str, ...]
+    waiting: tuple[str, ...] = ()  # seen in the tray, off the workspace
 
     def scene(self, believed: Scene) -> Scene:
-        """`believed` with every object on the table where it was seen (held ones stay where they were believed)."""
+        """`believed` with every object on the table where it was seen (held ones stay where they were believed),
+        and none of those waiting in the tray."""
         objects = dict(believed.objects)
         for name, sighting in self.seen.items():
-            if not sighting.held:
+            if name in self.waiting:
+                objects.pop(name, None)
+            elif not sighting.held:
                 objects[name] = Pose(sighting.x, sighting.y, sighting.yaw or 0.0)
         return Scene(objects, believed.robot)
 
@@ -78,7 +82,9 @@ def look(
         if name not in seen:
             yaw = cube_yaw(image, locate.colour_mask(image, geometry.colours[name]), calibration, (x, y), size)
             seen[name] = Sighting(x, y, size / 2, yaw)
-    return View(seen, tuple(name for name in geometry.colours if name not in seen))
+    unseen = tuple(name for name in geometry.colours if name not in seen)
+    waiting = tuple(name for name, at in seen.items() if not at.held and geometry.waiting(at.x, at.y))
+    return View(seen, unseen, waiting)
 
 
 def _without_arm(image: np.ndarray, calibration: CameraCalibration, arm: np.ndarray) -> np.ndarray:

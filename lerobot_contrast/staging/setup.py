@@ -33,12 +33,15 @@ def default_calibration(task_ref: str) -> Path | None:
 
 
 def geometry(task: Task, size: float) -> BenchGeometry:
-    """The task's workspace bounds and its objects' colours (a task file's `colour`, else a Language-Table
-    block's name, e.g. red_moon)."""
-    spec = getattr(task, "spec", None)
+    """The task's workspace bounds, its objects' colours (a task file's `colour`, else a Language-Table block's
+    name, e.g. red_moon) and its tray."""
+    spec, tray = getattr(task, "spec", None), None
     if spec is not None:
         area = spec.workspace.area
         bounds = ((area.x[0], area.y[0]), (area.x[1], area.y[1]))
+        if spec.workspace.tray is not None:
+            (x0, x1), (y0, y1) = spec.workspace.tray.box
+            tray = ((x0, y0), (x1, y1))
         said = {n: o.attributes.get("colour", o.attributes.get("color")) for n, o in spec.objects.items()}
     else:
         from lerobot_contrast.domains.language_table import board
@@ -46,7 +49,7 @@ def geometry(task: Task, size: float) -> BenchGeometry:
         bounds = board.WORKSPACE_BOUNDS
         said = {name: name.split("_")[0] for name in board.ALL_BLOCKS}
     colours = {name: known_colour(word) for name, word in said.items() if known_colour(word)}
-    return BenchGeometry(bounds, colours, size)
+    return BenchGeometry(bounds, colours, size, tray)
 
 
 def pick_camera(calibrations: dict[str, CameraCalibration], robot: Any, path: Path) -> CameraCalibration:

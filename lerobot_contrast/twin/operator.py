@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.twin.console_session import run_answered
@@ -63,35 +64,34 @@ class PlacementError:
 
 
 class Plan:
-    """The run's trials as the evaluator plans them, to know each trial's goal (read from the same flags)."""
+    """What the run's flags say beyond each trial: its task (to judge with the task's own goal check) and where the
+    twin keeps objects off the workspace. Each trial's instance comes from the channel, as the evaluator ran it."""
 
     def __init__(self, eval_argv: Sequence[str]):
         from lerobot_contrast.so101.scene import start_poses
         from lerobot_contrast.spine.build import check_robot_type, register_robots
         from lerobot_contrast.spine.config import EvalConfig, resume_args
-        from lerobot_contrast.spine.evaluation import preview
         from lerobot_contrast.spine.flags import bool_flags, join_values, parse_config
         from lerobot_contrast.spine.run_setup import planned_evaluation
 
         argv = join_values(list(eval_argv), bool_flags(EvalConfig))
         check_robot_type(argv, register_robots())
-        planned = planned_evaluation(parse_config(EvalConfig, resume_args(argv)))
-        self.task = planned.task
-        self.instances = {r.index: r.instance for r in preview(planned) if r.instance is not None}
+        self.task = planned_evaluation(parse_config(EvalConfig, resume_args(argv))).task
         self.parking = start_poses(self.task.spec, None)  # where the twin keeps objects off the workspace
 
-    def judge(self, index: int, instruction: str, scene: Scene, lifted: Collection[str] = ()) -> bool:
-        """Whether trial `index` reached its goal in `scene`; an object still `lifted` (in the gripper) is not
-        placed, wherever it hangs."""
-        instance = self.instances.get(index)
-        if instance is None or instance.instruction != instruction:
-            raise OperatorError(
-                f"trial {index + 1} says {instruction!r}, which the plan does not: run the operator with the same "
-                "eval flags"
-            )
+    def judge(self, instance: Instance, scene: Scene, lifted: Collection[str] = ()) -> bool:
+        """Whether `instance` reached its goal in `scene`; an object still `lifted` (in the gripper) is not placed,
+        wherever it hangs."""
         if (instance.goal.get("predicate") or {}).get("subject") in lifted:
             return False
         return self.task.is_achieved(instance, scene)
+
+
+def ran(message: dict) -> Instance:
+    """The instance a trial's start event says the evaluator runs."""
+    if "instance" not in message:
+        raise OperatorError("the console's channel names no instance for its trials: run this with the same version")
+    return Instance.from_json(message["instance"])
 
 
 class Operator:
@@ -101,7 +101,7 @@ class Operator:
     def __init__(self, plan: Plan, placement: PlacementClient, error: PlacementError, seed: int, on_flagged: str):
         self.plan, self.placement, self.error, self.on_flagged = plan, placement, error, on_flagged
         self.rng = np.random.default_rng(seed)
-        self.index, self.instruction = 0, ""
+        self.index, self.instance = 0, None  # the trial being run, as the evaluator says it runs it
         self.moves: dict[str, tuple[float, float] | None] = {}  # object -> target (None: off the workspace)
         self.fixes = 0
         self.placed: list[dict] = []  # every placement made: object, target, where it was put
@@ -111,8 +111,10 @@ class Operator:
     def handle(self, message: dict) -> str | None:
         """One message of the console's channel; returns what to type (a line) when it is a prompt."""
         prompt = message.get("prompt")
+        if message.get("event") == "trial":
+            self.index, self.instance = message["trial"], ran(message)
         if prompt == "stage":
-            self.index, self.instruction, self.fixes = message["trial"], message["instruction"], 0
+            self.fixes = 0
             self.moves = {name: None if to is None else (to[0], to[1]) for name, to in message["moves"].items()}
             return self._stage()
         if prompt == "check":
@@ -127,7 +129,6 @@ class Operator:
             self._place({name: None if to is None else (to[0], to[1]) for name, to in message["fix"].items()})
             return ""
         if prompt == "label":
-            self.index, self.instruction = message["trial"], message["instruction"]
             return self._label()
         return "" if prompt == "aborted" else None
 
@@ -152,17 +153,14 @@ class Operator:
         self.said.append(f"{ENDED}{where}")
         for name, up in lifted.items():
             self.said.append(held_line(name, up))
-        return "y" if self.plan.judge(self.index, self.instruction, scene, lifted) else "n"
+        return "y" if self.plan.judge(self.instance, scene, lifted) else "n"
 
     def _strays(self, seen: Scene) -> dict[str, tuple[float, float]]:
         """Objects the console says to leave that are not where the trial starts them (the robot moved them in the
         trial before, and no camera told the console): a person sees them and puts them back."""
-        instance = self.plan.instances.get(self.index)
-        if instance is None:
-            return {}
         return {
             name: (pose.x, pose.y)
-            for name, pose in instance.scene.objects.items()
+            for name, pose in self.instance.scene.objects.items()
             if name not in self.moves and name in seen.objects and seen.objects[name].distance_to(pose) > STRAY_M
         }
 

@@ -1,19 +1,25 @@
 """Unattended sessions on the twin: the arm stages every trial and the camera labels it (`--operator=arm`), judged
 against the twin's truth. Starts its own twin (640x480, wide-angle lens), lays the printed board and calibrates the
 camera as a person would once, takes the board away, then runs a contrast set with the arm as operator; the scripted
-person answers only when the arm rings for one. The twin's truth is read here, by the judge, never by the arm.
+person answers only when the arm rings for one. The twin's truth is read here, by the judge, never by the arm; the
+judge takes each trial's instance and targets from what the evaluator says it runs (the console's channel), and the
+truth of an outcome from the moment the episode ended, before the arm lets go.
 
-    .venv/bin/python scripts/bench/bench_unattended.py --bases=N [--joint_offset_deg=D] [--task=so101_blocks]
-        [--perturbations=L,SB] [--seed=0] [--work=DIR]
+    .venv/bin/python scripts/bench/bench_unattended.py [--bases=3] [--joint_offset_deg=D] [--task=so101_blocks]
+        [--perturbations=L,SB] [--episode_s=S] [--seed=0] [--work=DIR]
 
-Prints the confusion table of the camera's labels against the truth, then on its last line: unattended_share=...
-placement_median_cm=... placement_p95_cm=... label_agreement=... person_calls=... staging_s_per_trial=...
-trials_per_hour=...
+`--work=DIR` keeps the run and the judge's records there: run again with the same DIR to resume a session that
+stopped (a kill, a bus that stopped answering), the figures counting every trial once. Prints the confusion table
+of the camera's labels against the truth, then on its last line: unattended_share=... labelled_by_camera=...
+label_agreement=... placement_median_cm=... placement_p95_cm=... camera_error_p95_cm=... person_calls=...
+staging_s_per_trial=... trials_per_hour=... trials=... (trials per hour of the session's wall time, counted
+from the first trial's staging to the last label, resumes included)
 """
 
 from __future__ import annotations
 
 import json
+import math
 import shlex
 import sys
 import tempfile
@@ -24,51 +30,82 @@ from pathlib import Path
 import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.so101 import DEFAULT_PACE, PICK_AND_PLACE_S
 from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.twin.console_session import run_answered
 from lerobot_contrast.twin.launch import running_twin
-from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan
+from lerobot_contrast.twin.operator import LIFTED_M, Operator, OperatorError, PlacementError, Plan
 from lerobot_contrast.twin.placement_client import PlacementClient
 from lerobot_contrast.twin.table_calibration import calibrate_table
 
 RESUMES = 3
+FPS = 30
+# The demonstrator's pick and place takes PICK_AND_PLACE_S at its pace; a second more lets it put the cube down
+# and withdraw before the episode ends.
+EPISODE_S = PICK_AND_PLACE_S * DEFAULT_PACE + 1.0
 
 
 class Judge(Operator):
     """The scripted person (called only by the arm's bell) and the judge: where the arm put each object when the
-    episode starts, and the true outcome when the camera labels, both from the twin's truth."""
+    episode starts and where the camera saw it, and the true outcome when the episode ended, from the twin's truth.
+    Every judgement is appended to `records` (JSON lines), and those already there are read back on a resume."""
 
-    def __init__(self, *args, **kwargs) -> None:
+    def __init__(self, *args, records: Path, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.placement_m: list[float] = []
+        self.records = records
+        self.placement_m: dict[tuple[int, str], float] = {}  # (trial, object) -> metres from its target (truth)
+        self.staged: dict[int, dict[str, list[float]]] = {}  # trial -> each object's true (x, y) when it ran
         self.labels: dict[int, tuple[bool, bool, bool]] = {}  # trial -> (camera's label, truth, camera sure)
         self.person: Counter = Counter()  # trial -> times a person was needed (calls and labels asked)
+        self.truth_at_end: tuple = (None, set())
+        self.session_s = 0.0  # wall seconds of every labelled trial, from the one before it (or the session's start)
+        self._clock = time.monotonic()
+        if records.is_file():
+            for line in records.read_text().splitlines():
+                self._keep(json.loads(line), write=False)
 
     def handle(self, message: dict) -> str | None:
         kind = message.get("prompt") or message.get("event")
-        if kind == "trial":
-            self.index, self.instruction = message["trial"], message["instruction"]
         if kind in ("call", "label"):
-            self.person[message["trial"]] += 1
+            self._keep({"kind": "person", "trial": message["trial"]})
+        answer = super().handle(message)  # the trial's start sets self.index and self.instance
         if kind == "running":
             self._placed()
+        if kind == "ended":
+            scene, heights = self.placement.look()
+            lifted = {name for name, z in heights.items() if z - self.resting.get(name, z) > LIFTED_M}
+            self.truth_at_end = (scene, lifted)
         if kind == "labelled":
-            self.index, self.instruction = message["trial"], message["instruction"]
-            self._judged(message["success"], message["sure"])
-        return super().handle(message)
+            truth = self.plan.judge(self.instance, *self.truth_at_end)
+            now = time.monotonic()
+            spent, self._clock = now - self._clock, now
+            self._keep({"kind": "label", "trial": self.index, "camera": message["success"], "truth": truth,
+                        "sure": message["sure"], "s": spent})  # fmt: skip
+        return answer
 
     def _placed(self) -> None:
-        instance = self.plan.instances.get(self.index)
         truth, self.resting = self.placement.look()  # heights as staged: a cube lifted later is held
-        for name, target in ({} if instance is None else instance.scene.objects).items():
-            if name in truth.objects and self.plan.task.spec.workspace.area.contains(target.x, target.y):
-                self.placement_m.append(truth.objects[name].distance_to(target))
-                self.said.append(f"judge: {name} {self.placement_m[-1] * 100:.1f} cm from its target (truth)")
+        workspace = self.plan.task.spec.workspace.area
+        for name, target in self.instance.scene.objects.items():
+            if name in truth.objects and workspace.contains(target.x, target.y):
+                off = truth.objects[name].distance_to(target)
+                self.said.append(f"judge: {name} {off * 100:.1f} cm from its target (truth)")
+                self._keep({"kind": "placed", "trial": self.index, "object": name, "off_m": off,
+                            "at": [truth.objects[name].x, truth.objects[name].y]})  # fmt: skip
 
-    def _judged(self, success: bool, sure: bool) -> None:
-        scene, heights = self.placement.look()
-        lifted = {name for name, z in heights.items() if z - self.resting.get(name, z) > 0.02}
-        self.labels[self.index] = (success, self.plan.judge(self.index, self.instruction, scene, lifted), sure)
+    def _keep(self, record: dict, write: bool = True) -> None:
+        trial = record["trial"]
+        if record["kind"] == "person":
+            self.person[trial] += 1
+        elif record["kind"] == "placed":
+            self.placement_m[(trial, record["object"])] = record["off_m"]
+            self.staged.setdefault(trial, {})[record["object"]] = record["at"]
+        else:
+            self.labels[trial] = (record["camera"], record["truth"], record["sure"])
+            self.session_s += record["s"]
+        if write:
+            with self.records.open("a") as out:
+                out.write(json.dumps(record) + "\n")
 
 
 def complete(run_dir: Path) -> bool:
@@ -76,7 +113,19 @@ def complete(run_dir: Path) -> bool:
     return summary.is_file() and bool(json.loads(summary.read_text()).get("complete"))
 
 
-def figures(judge: Judge, run_dir: Path, hours: float) -> dict[str, str]:
+def camera_errors(judge: Judge, done: list[dict]) -> list[float]:
+    """Metres between where the camera saw each object it staged (the journal's staging record) and where the twin
+    had it, for every object on the workspace when a trial ran."""
+    errors = []
+    for record in done:
+        seen = record["extra"].get("staging", {}).get("placed", {})
+        for name, (x, y) in judge.staged.get(record["index"], {}).items():
+            if name in seen:
+                errors.append(math.dist(seen[name], (x, y)))
+    return errors
+
+
+def figures(judge: Judge, run_dir: Path) -> dict[str, str]:
     journal = run_dir / "journal.jsonl"
     if not journal.is_file():
         raise UserError(f"the evaluation on the twin did not run (no {journal}); see the log above")
@@ -85,17 +134,22 @@ def figures(judge: Judge, run_dir: Path, hours: float) -> dict[str, str]:
     if not done:
         raise UserError(f"no trial finished in {run_dir}; see the log above")
     alone = [r for r in done if not judge.person[r["index"]]]
-    agree = [judge.labels[r["index"]][0] == judge.labels[r["index"]][1] for r in done if r["index"] in judge.labels]
+    labels = [judge.labels[r["index"]] for r in done if r["index"] in judge.labels]
+    by_camera = [(camera, truth) for camera, truth, sure in labels if sure]
     staging = [r["extra"].get("robot_s", 0.0) for r in done]
-    placed = np.array(judge.placement_m) * 100 if judge.placement_m else np.array([np.nan])
+    placed = np.array(list(judge.placement_m.values()) or [np.nan]) * 100
+    seen = np.array(camera_errors(judge, done) or [np.nan]) * 100
     return {
         "unattended_share": f"{len(alone) / len(done):.3f}",
+        "labelled_by_camera": f"{len(by_camera) / len(done):.3f}",
+        "label_agreement": f"{np.mean([c == t for c, t in by_camera]):.3f}" if by_camera else "nan",
         "placement_median_cm": f"{np.median(placed):.2f}",
         "placement_p95_cm": f"{np.percentile(placed, 95):.2f}",
-        "label_agreement": f"{np.mean(agree):.3f}" if agree else "nan",
+        "camera_error_p95_cm": f"{np.percentile(seen, 95):.2f}",
         "person_calls": str(sum(judge.person.values())),
         "staging_s_per_trial": f"{np.mean(staging):.1f}",
-        "trials_per_hour": f"{len(done) / hours:.1f}",
+        "trials_per_hour": f"{len(labels) / (judge.session_s / 3600):.1f}" if judge.session_s else "nan",
+        "trials": str(len(done)),
     }
 
 
@@ -111,47 +165,51 @@ def confusion(judge: Judge) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = ScriptParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--bases", type=int, default=30, help="base instances of the contrast set")
+    parser.add_argument("--bases", type=int, default=3, help="base instances of the contrast set")
     parser.add_argument("--joint_offset_deg", type=float, default=0.0, help="each joint's calibration off by up to D")
     parser.add_argument("--task", default="so101_blocks")
     parser.add_argument("--perturbations", default=None, help="the perturbations applied (default: the task's)")
+    parser.add_argument("--episode_s", type=float, default=EPISODE_S,
+                        help=f"each episode's length (default {EPISODE_S:g}: the demonstrator's pick and place)")  # fmt: skip
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
-        "--work", type=Path, default=None, help="where the run directory goes (default: a temporary one)"
+        "--work", type=Path, default=None, help="where the run and the judge's records go; again to resume"
     )
     args = parser.parse_args(argv)
-    if args.bases < 1 or not 0 <= args.joint_offset_deg <= 10:
-        parser.error("--bases must be at least 1 and --joint_offset_deg within 0-10")
+    if args.bases < 1 or not 0 <= args.joint_offset_deg <= 10 or args.episode_s <= 0:
+        parser.error("--bases must be at least 1, --joint_offset_deg within 0-10 and --episode_s above 0")
     work = args.work or Path(tempfile.mkdtemp(prefix="bench_unattended_"))
+    work.mkdir(parents=True, exist_ok=True)
+    run_dir = work / "run"
     try:
         with running_twin(f"--task={args.task}", f"--joint_offset_deg={args.joint_offset_deg}",
                           f"--seed={args.seed}") as twin:  # fmt: skip
             table = calibrate_table(twin, args.task, work / "table.calibration.json")
-            run_dir = work / "run"
             eval_argv = [f"--task={args.task}", *shlex.split(twin.robot_flags), "--operator=arm",
                          "--policy.type=so101_demonstrator", f"--policy.options={{placement: {twin.placement}}}",
-                         "--strategy=contrast", f"--n_instances={args.bases}", "--fps=30", "--max_episode_s=20",
+                         "--strategy=contrast", f"--n_instances={args.bases}", f"--fps={FPS}",
+                         f"--max_episode_steps={math.ceil(args.episode_s * FPS)}",
                          f"--staging.calibration={table}", "--staging.viewer=none", "--rerun=false",
                          f"--seed={args.seed}", f"--output_dir={run_dir}"]  # fmt: skip
             if args.perturbations:
                 eval_argv.append(f"--perturbations={args.perturbations}")
-            judge = Judge(Plan(eval_argv), PlacementClient(twin.placement), PlacementError(), args.seed, "accept")
-            started = time.monotonic()
-            code = run_answered(eval_argv, judge, (OperatorError,))
-            for _ in range(RESUMES):  # a bus that stops answering on a loaded machine ends the session resumably
+            judge = Judge(Plan(eval_argv), PlacementClient(twin.placement), PlacementError(), args.seed, "accept",
+                          records=work / "judge.jsonl")  # fmt: skip
+            code = 0
+            for _ in range(RESUMES + 1):  # a bus that stops answering on a loaded machine ends it resumably
                 if complete(run_dir):
                     break
-                print(f"bench_unattended: the session stopped early; resuming {run_dir}", flush=True)
-                code = run_answered([*eval_argv, "--resume=true"], judge, (OperatorError,))
-            hours = (time.monotonic() - started) / 3600
-        said = figures(judge, run_dir, hours)
+                resume = ["--resume=true"] if (run_dir / "journal.jsonl").is_file() else []
+                if resume:
+                    print(f"bench_unattended: resuming {run_dir}", flush=True)
+                code = run_answered([*eval_argv, *resume], judge, (OperatorError,))
+        said = figures(judge, run_dir)
     except (UserError, OperatorError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     print(confusion(judge))
-    trials = len(judge.labels)
-    print(f"eval exit {code}; bases={args.bases} trials labelled={trials} joint_offset_deg={args.joint_offset_deg:g} "
-          f"run: {run_dir}")  # fmt: skip
+    print(f"eval exit {code}; bases={args.bases} joint_offset_deg={args.joint_offset_deg:g} "
+          f"episode_s={args.episode_s:g} run: {run_dir}")  # fmt: skip
     print(" ".join(f"{key}={value}" for key, value in said.items()))
     return 0
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from rich.console import Console
 
+from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
@@ -60,6 +61,7 @@ def test_each_prompt_goes_to_the_channel_as_one_json_line(tmp_path):
         "aborted",
     ]
     assert messages[0]["moves"] == messages[1]["moves"]
+    assert Instance.from_json(messages[0]["instance"]) == trial.instance  # what runs, for a judge to judge by
     messages = messages[1:]
     stage = messages[0]
     assert stage["trial"] == 0 and stage["of"] == 3 and stage["instruction"] == trial.instance.instruction

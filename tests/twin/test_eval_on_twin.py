@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from lerobot_contrast.contrast.instance import Instance
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.ports import free_port
 from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan
@@ -131,6 +132,22 @@ class FakePlacement:
         return self.scene(), dict(self.z)
 
 
+def planned_trials() -> dict[int, Instance]:
+    """The trials of RUN as the evaluator plans them: what its channel says it runs."""
+    from lerobot_contrast.spine.config import EvalConfig
+    from lerobot_contrast.spine.evaluation import preview
+    from lerobot_contrast.spine.flags import parse_config
+    from lerobot_contrast.spine.run_setup import planned_evaluation
+
+    planned = planned_evaluation(parse_config(EvalConfig, [*RUN, "--robot.type=so101_follower", "--robot.port=unused"]))
+    return {r.index: r.instance for r in preview(planned) if r.instance is not None}
+
+
+def started(index: int, instance: Instance) -> dict:
+    """The channel's event at a trial's start."""
+    return {"event": "trial", "trial": index, "instruction": instance.instruction, "instance": instance.to_json()}
+
+
 INSTRUCTION = "put the red cube next to the green cube"
 STAGE = {"prompt": "stage", "trial": 0, "of": 3, "instruction": INSTRUCTION,
          "moves": {"green_cube": [0.320, -0.041], "red_cube": [0.269, 0.057]}}  # fmt: skip
@@ -145,7 +162,10 @@ def test_the_operator_places_what_the_console_says_and_labels_from_the_true_scen
     truth = Scene({"red_cube": Pose(*red), "green_cube": Pose(0.32, -0.041), "blue_cube": Pose(0.39, 0.07)})
     placement = FakePlacement(truth)
     scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="fix")
-    typed = [answer for message in CHANNEL if (answer := scripted.handle(message)) is not None]
+    first = planned_trials()[0]
+    assert first.instruction == INSTRUCTION
+    channel = [started(0, first), *CHANNEL]
+    typed = [answer for message in channel if (answer := scripted.handle(message)) is not None]
     assert typed == ["", "", label]  # staged, the flagged cube placed again, the label the scene shows
     assert placement.placed == {"green_cube": (0.320, -0.041), "red_cube": (0.269, 0.057)}
 
@@ -160,12 +180,13 @@ class MovingPlacement(FakePlacement):
 
 def test_what_the_robot_moved_and_the_console_says_to_leave_is_put_back_and_reported():
     plan = Plan([*RUN, "--robot.type=so101_follower", "--robot.port=unused"])
-    start = plan.instances[1].scene.objects  # the ΔL trial starts from the base's scene
+    second = planned_trials()[1]
+    start = second.scene.objects  # the ΔL trial starts from the base's scene
     in_bin = Pose(0.30, 0.18)  # where the base's trial left the red cube: no camera told the console
     placement = MovingPlacement(Scene({**start, "red_cube": in_bin}))
     scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="accept")
-    stage = {"prompt": "stage", "trial": 1, "of": 3, "instruction": plan.instances[1].instruction, "moves": {}}
-    typed = [scripted.handle(stage)]
+    stage = {"prompt": "stage", "trial": 1, "of": 3, "instruction": second.instruction, "moves": {}}
+    typed = [scripted.handle(message) for message in (started(1, second), stage)][1:]
     back = start["red_cube"]
     assert placement.placed == {"red_cube": pytest.approx((back.x, back.y))}
     assert typed == [f"c {in_bin.distance_to(back):.3f}"]  # the metres moved, as a person types them
@@ -173,10 +194,11 @@ def test_what_the_robot_moved_and_the_console_says_to_leave_is_put_back_and_repo
 
 def test_a_cube_still_held_over_its_goal_when_the_episode_ends_is_a_failure():
     plan = Plan([*RUN, "--robot.type=so101_follower", "--robot.port=unused"])
-    start = plan.instances[0].scene.objects
+    first = planned_trials()[0]
+    start = first.scene.objects
     placement = FakePlacement(Scene(dict(start)))
     scripted = Operator(plan, placement, PlacementError.parse("none"), seed=0, on_flagged="accept")
-    typed = [scripted.handle(message) for message in (STAGE, CHECK)]
+    typed = [scripted.handle(message) for message in (started(0, first), STAGE, CHECK)][1:]
     assert typed == ["", "a"]  # staged, and what the camera flagged accepted
     green = start["green_cube"]  # the goal holds by x and y: the red cube hangs right beside the green one
     placement.reported = Scene({**start, "red_cube": Pose(green.x + 0.04, green.y)})

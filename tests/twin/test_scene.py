@@ -2,6 +2,7 @@
 puts them, bins that hold cubes, the spare cube parked off the workspace; resting objects neither sink nor jitter."""
 
 import math
+from dataclasses import replace
 
 import mujoco
 import numpy as np
@@ -11,7 +12,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.task_file import load_task_file, task_from_dict
 from lerobot_contrast.so101 import arm
-from lerobot_contrast.so101.scene import COLOURS, build_spec, table_extent
+from lerobot_contrast.so101.scene import COLOURS, build_spec, start_poses, table_extent
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.servos import ServoBank
 
@@ -41,11 +42,15 @@ def test_objects_have_the_task_files_colours_sizes_and_poses(blocks, physics):
         assert poses[name][3] == pytest.approx(pose.yaw)
 
 
-def test_the_spare_cube_waits_off_the_workspace_on_the_table(blocks, physics):
+def test_the_spare_cube_waits_in_the_tray_and_without_one_off_the_workspace(blocks, physics):
     x, y, z, _ = physics.poses()["yellow_cube"]
-    assert not blocks.workspace.area.contains(x, y)
-    (x0, x1), (y0, y1) = table_extent(blocks)
-    assert x0 < x < x1 and y0 < y < y1 and z == pytest.approx(0.015, abs=0.001)
+    assert blocks.workspace.tray.contains(x, y) and z == pytest.approx(0.015, abs=0.001)
+    assert not any(region.contains(x, y) for region in blocks.workspace.regions.values())
+    trayless = replace(blocks, workspace=replace(blocks.workspace, tray=None))
+    spare = start_poses(trayless, None)["yellow_cube"]
+    assert not trayless.workspace.area.contains(spare.x, spare.y)
+    (x0, x1), (y0, y1) = table_extent(trayless)
+    assert x0 < spare.x < x1 and y0 < spare.y < y1
 
 
 def test_bins_are_walled_around_their_regions(blocks, physics):

@@ -86,7 +86,7 @@ def _unit(scale: float) -> str:
 
 
 def parse_workspace(node: Node) -> Workspace:
-    node.check_keys(("units", "bounds", "regions", "min_spacing", "robot_start", "storage"))
+    node.check_keys(("units", "bounds", "regions", "min_spacing", "robot_start", "storage", "tray"))
     units_node = node.get("units")
     units = "m" if units_node is None else units_node.choice(UNITS)
     scale = UNITS[units]
@@ -108,6 +108,7 @@ def parse_workspace(node: Node) -> Workspace:
     if robot_start is not None and not area.contains(robot_start.x, robot_start.y):
         start.fail("the robot's start pose must lie inside the workspace bounds")
     storage = node.get("storage")
+    tray = node.get("tray")
     return Workspace(
         units=units,
         area=area,
@@ -115,7 +116,26 @@ def parse_workspace(node: Node) -> Workspace:
         regions=regions,
         robot_start=robot_start,
         storage=None if storage is None else _storage(storage, scale, area),
+        tray=None if tray is None else _tray(tray, scale, area, regions),
     )
+
+
+def _tray(node: Node, scale: float, area: Region, regions: dict[str, Region]) -> Region:
+    """A box inside the bounds where spare objects wait, seen by the camera and reached by an arm that stages."""
+    if node.get("center") is not None or node.get("radius") is not None:
+        node.fail("the tray is a box {x: [min, max], y: [min, max]}")
+    tray = parse_region("tray", node, scale, area)
+    for name, region in regions.items():
+        if overlaps(tray, region):
+            node.fail(f"the tray overlaps region {name!r}; objects waiting in it would count as placed there")
+    return tray
+
+
+def overlaps(a: Region, b: Region) -> bool:
+    """Whether the bounding boxes of `a` and `b` share any area."""
+    (ax0, ax1), (ay0, ay1) = a.box
+    (bx0, bx1), (by0, by1) = b.box
+    return ax0 < bx1 and bx0 < ax1 and ay0 < by1 and by0 < ay1
 
 
 def diagonal(area: Region) -> float:
@@ -180,6 +200,14 @@ def parse_objects(node: Node, workspace: Workspace) -> dict[str, ObjectSpec]:
     if not node.mapping():
         node.fail("expected at least one object")
     objects = {name: parse_object(name, child, workspace) for name, child in node.items()}
+    tray = workspace.tray
+    for name, child in node.items():
+        spot = workspace.area if objects[name].area is None else workspace.regions[objects[name].area]
+        if tray is not None and objects[name].movable and overlaps(tray, spot):
+            child.fail(
+                f"{name!r} may be placed in the tray ({'the whole workspace' if objects[name].area is None else spot.name}"
+                " overlaps it); give it an area apart from the tray"
+            )
     said: dict[str, str] = {}
     for name, child in node.items():
         for word in objects[name].words:

@@ -53,6 +53,7 @@ class Workspace:
     regions: Mapping[str, Region]
     robot_start: Pose | None = None
     storage: tuple[tuple[float, float], tuple[float, float]] | None = None
+    tray: Region | None = None  # inside the bounds, apart from every area: where spare objects wait in view and reach
 
 
 @dataclass(frozen=True)

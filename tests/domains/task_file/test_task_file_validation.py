@@ -45,6 +45,37 @@ CASES = {
         "left: {x",
         "workspace.regions.left: region 'left' reaches outside the workspace",
     ),
+    "tray over a region": (
+        [
+            (
+                "    middle: {x: [0.2, 0.8], y: [-0.2, 0.2]}\n",
+                "    middle: {x: [0.2, 0.8], y: [-0.2, 0.2]}\n  tray: {x: [0.7, 1.0], y: [0.3, 0.4]}\n",
+            )
+        ],
+        "tray:",
+        "workspace.tray: the tray overlaps region 'left'",
+    ),
+    "tray as a disc": (
+        [
+            (
+                "    middle: {x: [0.2, 0.8], y: [-0.2, 0.2]}\n",
+                "    middle: {x: [0.2, 0.8], y: [-0.2, 0.2]}\n  tray: {center: [0.9, 0], radius: 0.05}\n",
+            )
+        ],
+        "tray:",
+        "workspace.tray: the tray is a box",
+    ),
+    "object that may be placed in the tray": (
+        [
+            (
+                "    middle: {x: [0.2, 0.8], y: [-0.2, 0.2]}\n",
+                "    middle: {x: [0.2, 0.8], y: [-0.2, 0.2]}\n  tray: {x: [0.85, 1.0], y: [-0.1, 0.1]}\n",
+            ),
+            ("area: middle, spare", "spare"),
+        ],
+        "green_cup:",
+        "'green_cup' may be placed in the tray (the whole workspace overlaps it); give it an area apart from the tray",
+    ),
     "ambiguous object words": (
         [("blue_cup: {colour: blue", "blue_cup: {colour: red")],
         "blue_cup:",
