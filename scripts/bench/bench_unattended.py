@@ -57,6 +57,7 @@ class Judge(Operator):
         self.staged: dict[int, dict[str, list[float]]] = {}  # trial -> each object's true (x, y) when it ran
         self.labels: dict[int, tuple[bool, bool, bool]] = {}  # trial -> (camera's label, truth, camera sure)
         self.person: Counter = Counter()  # trial -> times a person was needed (calls and labels asked)
+        self.calls: Counter = Counter()  # trial -> times the arm called a person to the bench while staging
         self.truth_at_end: tuple = (None, set())
         self.session_s = 0.0  # wall seconds of every labelled trial, from the one before it (or the session's start)
         self._clock = time.monotonic()
@@ -67,7 +68,7 @@ class Judge(Operator):
     def handle(self, message: dict) -> str | None:
         kind = message.get("prompt") or message.get("event")
         if kind in ("call", "label"):
-            self._keep({"kind": "person", "trial": message["trial"]})
+            self._keep({"kind": "person", "trial": message["trial"], "why": kind})
         answer = super().handle(message)  # the trial's start sets self.index and self.instance
         if kind == "running":
             self._placed()
@@ -97,6 +98,7 @@ class Judge(Operator):
         trial = record["trial"]
         if record["kind"] == "person":
             self.person[trial] += 1
+            self.calls[trial] += record["why"] == "call"
         elif record["kind"] == "placed":
             self.placement_m[(trial, record["object"])] = record["off_m"]
             self.staged.setdefault(trial, {})[record["object"]] = record["at"]
