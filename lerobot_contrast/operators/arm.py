@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from lerobot_contrast.contrast.audited import audited
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
@@ -38,8 +39,11 @@ class ArmOperator:
 
     bench = None
 
-    def __init__(self, robot: Any, task: Any, camera: Bench, person: Any, args: ArmArgs, memory: ArmMemory) -> None:
+    def __init__(
+        self, robot: Any, task: Any, camera: Bench, person: Any, args: ArmArgs, memory: ArmMemory, seed: int = 0
+    ) -> None:
         self.robot, self.task, self.camera, self.person, self.args = robot, task, camera, person, args
+        self.seed = seed
         self.motion = ArmMotion(robot, plan.arm_model(task.spec), args.pace, self._stop_pressed)
         self.size = camera.geometry.size
         self.memory = memory
@@ -107,6 +111,17 @@ class ArmOperator:
     def label(self, subgoals: Sequence[str], suggestion: Judgement | None, early: str | None) -> Label:
         if early is not None and not subgoals:
             return Label("done", success=early == "success", progress=float(early == "success"))
+        label = self._label(subgoals)
+        if label.action != "done" or not audited(self.seed, self.context.index, self.args.audit):
+            return label
+        self.say("[bold]audit[/]: this trial was drawn for a person's label too; label it as you see it")
+        checked = self.person.label(subgoals, None, None)  # no suggestion: the person's own eyes
+        if checked.action != "done":
+            return checked  # redo, skip or stop, as the person says
+        return replace(label, audit=checked.success)
+
+    def _label(self, subgoals: Sequence[str]) -> Label:
+        """The camera's label, or a person's where the camera is unsure."""
         instance, view = self.context.instance, self.after
         held = (*self.held_at_end, *(name for name, seen in view.seen.items() if seen.held))
         said = verdict(self.task.is_achieved, instance, view.scene(instance.scene), view.unseen, held,

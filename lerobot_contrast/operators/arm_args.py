@@ -21,3 +21,6 @@ class ArmArgs:
     uncertainty: float = 0.003
     # What an unsure label does: ask (a person at the console labels it) or unlabelled (recorded for review later).
     unsure: str = "ask"
+    # The share of trials a person labels too, drawn at random from the run's seed whatever the camera's confidence:
+    # the audit that the report's prediction-powered estimates correct the camera's labels with (0: none).
+    audit: float = 0.0

@@ -10,13 +10,18 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.operators.arm_args import UNSURE, ArmArgs
 
 
-def arm_operator(args: ArmArgs, robot: Any, task: Any, bench: Any, person: Any, run_dir: Callable[[], Path | None]):
+def arm_operator(
+    args: ArmArgs, robot: Any, task: Any, bench: Any, person: Any, run_dir: Callable[[], Path | None], seed: int
+):
     """The arm as operator of `robot` (an SO-101 through LeRobot's so101_follower) on a task file's table, seeing
-    through `bench`'s calibrated camera; `person`: the console it calls when it needs a hand."""
+    through `bench`'s calibrated camera; `person`: the console it calls when it needs a hand; `seed`: the run's, which
+    draws the audit."""
     if args.unsure not in UNSURE:
         raise UserError(f"--arm.unsure: unknown {args.unsure!r}; choose from: {', '.join(UNSURE)}")
     if args.tries < 1 or args.pace <= 0 or args.uncertainty < 0:
         raise UserError("--arm.tries must be at least 1, --arm.pace above 0 and --arm.uncertainty at least 0")
+    if not 0 <= args.audit <= 1:
+        raise UserError(f"--arm.audit={args.audit:g}: give the share of trials a person labels too, from 0 to 1")
     if getattr(robot, "robot_type", None) != "so_follower":
         raise UserError(
             f"--operator=arm stages with an SO-101 (--robot.type=so101_follower); {robot.name} is not one, so use "
@@ -32,4 +37,4 @@ def arm_operator(args: ArmArgs, robot: Any, task: Any, bench: Any, person: Any, 
     from lerobot_contrast.operators.arm import ArmOperator
     from lerobot_contrast.operators.arm_memory import ArmMemory
 
-    return ArmOperator(robot, task, bench, person, args, ArmMemory(run_dir))
+    return ArmOperator(robot, task, bench, person, args, ArmMemory(run_dir), seed)

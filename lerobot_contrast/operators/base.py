@@ -34,6 +34,7 @@ class Label:
     progress: float | None = None
     unlabelled: bool = False  # recorded without a label, for review later (an arm operator unsure of the outcome)
     asked: bool = False  # a person was called to give this label (an arm operator unsure of the outcome)
+    audit: bool | None = None  # a person's own label of an audited trial, beside the camera's (an arm operator)
 
 
 class Operator(Protocol):

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from lerobot_contrast.reporting import analysis, figures, markdown, stats
+from lerobot_contrast.reporting.audit import audit_section
 from lerobot_contrast.reporting.runs import Group, Run, group_runs, policy_label, policy_pairs, reference_for
 
 
@@ -81,6 +82,7 @@ def write_markdown(runs: list[Run], groups: list[Group], versus, metric: str, pa
     lines += markdown.summary_section(analysis.summary_rows(groups), unit)
     lines += markdown.sequential_section(runs)
     lines += markdown.robot_staging_section(runs)
+    lines += audit_section(runs)
     pooled = "Pooled over seeds; n = trials."
     lines += markdown.by_group_section(
         f"{name} per perturbation", pooled, analysis.by_column(groups, "perturbation", metric), order

@@ -139,7 +139,7 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
         return console
     from lerobot_contrast.operators.arm_setup import arm_operator
 
-    return arm_operator(cfg.arm, robot, task, bench, console, run_dir)
+    return arm_operator(cfg.arm, robot, task, bench, console, run_dir, cfg.seed)
 
 
 def run_fps(cfg: EvalConfig, robot: Robot) -> float | None:

@@ -133,7 +133,8 @@ class EvalConfig:
     # Staging with a calibrated camera: --staging.calibration=PATH, --staging.tolerance=0.02 (metres),
     # --staging.object_size=0.03, --staging.viewer=serve|spawn|none.
     staging: StagingArgs = field(default_factory=StagingArgs)
-    # The arm as its own operator (--operator=arm): --arm.tries, --arm.pace, --arm.uncertainty, --arm.unsure.
+    # The arm as its own operator (--operator=arm): --arm.tries, --arm.pace, --arm.uncertainty, --arm.unsure,
+    # --arm.audit.
     arm: ArmArgs = field(default_factory=ArmArgs)
 
 

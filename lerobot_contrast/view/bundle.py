@@ -50,6 +50,7 @@ def _write(inputs: Inputs, root: Path, video_base: str | None) -> None:
             run["video_base"] = video_base
         if run["videos_absent"] is None:
             _episodes(Dataset(paths[run["id"]]), run, root, copy_videos=video_base is None)
+    (root / "data").mkdir(exist_ok=True)  # a run that recorded no dataset has no episodes to make it
     (root / "data" / "runs.js").write_text(script("viewData", doc), encoding="utf-8")
 
 

@@ -107,6 +107,17 @@ def test_the_bundle_holds_the_page_its_data_and_the_videos(runs, tmp_path, capsy
     assert main([str(runs["noisy"]), f"--bundle={out}"]) == 0  # a bundle is replaced by a new one
 
 
+def test_a_run_that_recorded_no_dataset_is_bundled_with_its_trials(runs, tmp_path, capsys):
+    """As the README's default run: no dataset, so no episodes or videos, and still the page and every trial."""
+    out = tmp_path / "site"
+    assert main([str(runs["oracle"]), f"--bundle={out}"]) == 0, capsys.readouterr().err
+    doc = document((out / "data" / "runs.js").read_bytes(), "viewData")
+    (run,) = doc["runs"]
+    assert run["trials"] and all(t["episode"] is None for t in run["trials"])
+    assert not (out / "data" / "episodes").exists() and not (out / "videos").exists()
+    assert (out / "index.html").is_file()
+
+
 @pytest.mark.filterwarnings("ignore:Use 'content=<...>' to upload raw bytes:DeprecationWarning")  # the Hub client's
 def test_publish_adds_the_bundle_reading_the_published_dataset_s_videos(hub, runs, copy_of):
     run = copy_of(runs["noisy"])
