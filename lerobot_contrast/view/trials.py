@@ -86,6 +86,8 @@ def trial_json(record: TrialRecord) -> dict[str, Any]:
         "target": None if instance is None else instance.goal.get("block"),
         "scene": None if instance is None else scene_json(instance.scene),
         "staging_check": record.extra.get("staging"),
+        "label_asked": bool(record.extra.get("label_asked")),  # a person labelled it where the arm's camera was unsure
+        "audit": record.extra.get("audit"),  # a person's label of a trial the audit drew (--arm.audit), else None
     }
 
 

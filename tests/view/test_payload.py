@@ -122,3 +122,14 @@ def test_an_ab_session_shows_report_s_interleaved_comparison_and_the_verdict(run
     assert tables["session: Each policy"] == report_rows(report, "Each policy")
     minus = next(title for title in tables if " minus " in title)
     assert tables[minus] == report_rows(report, minus.split(": ", 1)[1])
+
+
+def test_an_audited_trial_carries_the_persons_label_for_the_page_to_mark():
+    from lerobot_contrast.contrast.trial import TrialRecord
+    from lerobot_contrast.view.trials import trial_json
+
+    def record(extra):
+        return TrialRecord(0, "b0", None, None, "f", "reset", 0, "done", None, 0.0, 0.0, success=True, extra=extra)
+
+    assert (trial_json(record({"audit": False}))["audit"], trial_json(record({}))["audit"]) == (False, None)
+    assert trial_json(record({"label_asked": True}))["label_asked"] and not trial_json(record({}))["label_asked"]

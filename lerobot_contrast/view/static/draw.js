@@ -40,7 +40,15 @@ function outcome(trial) {
   if (trial.status !== "done") return el("span", { class: "other", title: trial.status }, trial.status.replace("_", " "));
   const text = trial.success ? "success" : "failure";
   const spl = trial.spl === null ? "" : ` (SPL ${trial.spl.toFixed(3)})`;
-  return el("span", { class: trial.success ? "ok" : "fail", "data-outcome": text }, text + spl);
+  const said = el("span", { class: trial.success ? "ok" : "fail", "data-outcome": text }, text + spl);
+  return trial.audit === null || trial.audit === undefined ? said : el("span", {}, said, " ", auditBadge(trial));
+}
+
+function auditBadge(trial) {
+  const agree = Boolean(trial.audit) === Boolean(trial.success);
+  const person = trial.audit ? "success" : "failure";
+  return el("span", { class: "audit" + (agree ? "" : " disagree"), "data-audit": person,
+    title: "drawn for the audit: a person labelled it too" }, agree ? "audited ✓" : `audit: person says ${person}`);
 }
 
 function flipBadge(original, perturbed) {
