@@ -49,6 +49,8 @@ class CalibrateConfig:
     # The calibration file to write (default: <task>.calibration.json beside your task file; for a shipped example,
     # tables/<task>.calibration.json in LeRobot's calibration folder, $HF_LEROBOT_CALIBRATION). eval finds either.
     output: Path | None = None
+    # Whose time the robot runs on: wall, or a twin's simulated clock (tcp://HOST:PORT, as eval's --clock).
+    clock: str = "wall"
     # Refuse a fit whose RMS reprojection error is above this many pixels (a positive number).
     max_error_px: float = 2.0
     # Write the printable board to this .pdf or .png and exit.
@@ -76,7 +78,7 @@ def frames(cfg: CalibrateConfig) -> dict[str, np.ndarray]:
         raise ConfigError(
             f"--robot.type={cfg.robot.type}: cannot build the robot ({' '.join(str(error).split())})"
         ) from None
-    connect(robot)
+    connect(robot, cfg.clock)
     try:
         return camera_frames(robot)
     finally:
@@ -84,6 +86,9 @@ def frames(cfg: CalibrateConfig) -> dict[str, np.ndarray]:
 
 
 def camera_frames(robot: Any) -> dict[str, np.ndarray]:
+    from lerobot_contrast.spine.clock import robot_clock
+
+    robot_clock().look()  # a frame of the board as it now lies
     observation = robot.get_observation()
     found = {k: np.asarray(v) for k, v in observation.items() if getattr(v, "ndim", 0) == 3 and v.shape[-1] == 3}
     if not found:

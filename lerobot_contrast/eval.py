@@ -59,7 +59,7 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
     robot = make_robot(cfg, chosen_robot)
     # Connect before creating the run directory: an unreachable robot leaves nothing behind to resume.
     # A remote robot also says on connecting whether it can stage scenes.
-    connect(robot)
+    connect(robot, cfg.clock)
     try:
         operator = make_operator(cfg, robot, task, planned.cost_model.unit)
         use_threads()  # chosen, not inherited from the machine (lane_choice.py)

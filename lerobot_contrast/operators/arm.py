@@ -27,6 +27,7 @@ from lerobot_contrast.operators.base import Label, SessionStopped, Staging
 from lerobot_contrast.operators.verdict import verdict
 from lerobot_contrast.so101 import plan, reach
 from lerobot_contrast.so101.motion import ArmMotion, Stopped
+from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.staging import seeing
 from lerobot_contrast.staging.check import Bench
 
@@ -54,13 +55,14 @@ class ArmOperator:
         self.calls = 0  # a person called to the bench, all session
         self._trial_calls = 0  # ... while staging this trial
         self._before, self._started, self._person_s = Spent(), 0.0, 0.0
+        self._person_clock_s = 0.0  # the robot clock's seconds while a person was called (none on a simulated one)
 
     # --- the operator interface ---
     def stage(self, context: TrialContext) -> Staging:
         self.context = context
         self.person.announce(context)
         self._before = self.memory.recall(context.index)  # a run killed mid-staging resumes with what it spent
-        self._started, self._person_s, self._trial_calls = time.monotonic(), 0.0, 0
+        self._started, self._person_s, self._person_clock_s, self._trial_calls = robot_clock().now(), 0.0, 0.0, 0
         try:
             with _link("staging"):
                 self.motion.open_and_withdraw()
@@ -77,7 +79,7 @@ class ArmOperator:
 
     def _checkpoint(self) -> Spent:
         """What staging this trial has spent so far, kept in the run directory."""
-        robot_s = time.monotonic() - self._started - self._person_s
+        robot_s = robot_clock().now() - self._started - self._person_clock_s
         spent = self._before.add(robot_s, self._person_s, self._trial_calls)
         self.memory.keep(self.context.index, spent)
         return spent
@@ -235,11 +237,12 @@ class ArmOperator:
         self._trial_calls += 1
         self.calls += 1
         self.motion.rest()
-        started = time.monotonic()
+        started, started_clock = time.monotonic(), robot_clock().now()
         fix = {name: None if (goal := target.objects.get(name)) is None else [goal.x, goal.y] for name in trouble}
         said = "; ".join(f"{name}: {why}" for name, why in trouble.items())
         answer = self.person.call(said, fix)
         self._person_s += time.monotonic() - started
+        self._person_clock_s += robot_clock().now() - started_clock
         self._checkpoint()
         if answer == "stop":
             raise SessionStopped("the operator stopped the session while the arm asked for help")

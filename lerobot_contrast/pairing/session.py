@@ -76,7 +76,7 @@ def run_policies(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
         choose_robot(probe)
         cfg.robot = probe.robot
     robot = make_robot(cfg, chosen_robot)
-    connect(robot)
+    connect(robot, cfg.clock)
     try:
         operator = make_operator(cfg, robot, planned.task, planned.cost_model.unit)
         use_threads()

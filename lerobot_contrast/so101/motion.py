@@ -5,7 +5,6 @@ when told to. Used by the arm operator that stages trials itself; nothing here r
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -14,13 +13,14 @@ import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.so101 import arm, reach
+from lerobot_contrast.spine.clock import robot_clock
 
 STEP_HZ = 30.0  # goals sent this often while moving: LeRobot's own teleoperation rate
 SETTLE_S = 0.3  # after the last goal, the servos close the rest of the way
 # Folded as at rest, turned to the side: at rest the jaws hang over the workspace's near edge, hiding what lies there.
 ASIDE = {**arm.REST, "shoulder_pan": math.radians(100)}
-READ_RETRIES = 3
-HOLD_GAP = 0.02  # rad: a closed gripper this far short of its goal is held open by an object  # a status packet lost on a busy bus is asked for again before the arm counts as gone
+READ_RETRIES = 3  # a status packet lost on a busy bus is asked for again before the arm counts as gone
+HOLD_GAP = 0.02  # rad: a closed gripper this far short of its goal is held open by an object
 
 
 class Stopped(UserError):
@@ -80,20 +80,21 @@ class ArmMotion:
             goal = {name: waypoint.goals.get(name, start[name]) + correction.get(name, 0.0) for name in start}
             self._glide(start, goal, waypoint.seconds * self.pace)
             start = goal
-        time.sleep(SETTLE_S)
+        robot_clock().sleep(SETTLE_S)
         self.moving_s += SETTLE_S
 
     def _glide(self, start: Mapping[str, float], goal: Mapping[str, float], seconds: float) -> None:
         steps = max(1, math.ceil(seconds * STEP_HZ))
+        clock = robot_clock()
         for step in range(1, steps + 1):
             if self.stop():
                 raise Stopped("the stop key was pressed while the arm was staging; it holds where it was")
-            tick = time.monotonic()
+            tick = clock.now()
             share = 0.5 - 0.5 * math.cos(math.pi * step / steps)  # ease in and out: no jerk at either end
             angles = {name: start[name] + share * (goal[name] - start[name]) for name in goal}
             self.robot.send_action(arm.lerobot_action(angles))
             self.goal = angles
-            time.sleep(max(0.0, 1.0 / STEP_HZ - (time.monotonic() - tick)))
+            clock.sleep(1.0 / STEP_HZ - (clock.now() - tick), watched=False)  # the camera looks once it settles
             self.moving_s += 1.0 / STEP_HZ
 
     def rest(self, gripper: float | None = None) -> None:

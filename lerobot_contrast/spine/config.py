@@ -95,6 +95,9 @@ class EvalConfig:
     robot: robots.RobotConfig | None = None
     # Control rate in Hz; default: 10 on hardware, as fast as possible on a simulated robot.
     fps: float | None = None
+    # Whose time the robot runs on: wall (real time), or the simulated clock of a virtual SO-101 started with
+    # --clock=sim, at the tcp://HOST:PORT it printed (its eval flags include it).
+    clock: str = "wall"
     # Who stages and labels: console (a person), arm (the SO-101 itself, its camera labelling; docs: unattended.md)
     # or auto (the robot stages its own scene, as in simulation). Default: auto where the robot can, else console.
     operator: str | None = None
@@ -149,7 +152,7 @@ def resume_args(argv: list[str]) -> list[str]:
 
 # Choices of one session that a resumed run may make differently (the staging camera's included), so they are not
 # stored in config.json.
-SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging", "operator_channel")
+SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging", "operator_channel", "clock")
 
 
 # Settings of interleaved runs (--policies), left out of a single-policy run's config.json while at their default.

@@ -60,6 +60,10 @@ def validate(cfg: EvalConfig) -> None:
         raise ConfigError(f"--operator: unknown mode {cfg.operator!r}; choose from: {', '.join(OPERATORS)}")
     _check_policy_args(cfg)
     parse_lanes(cfg.lanes)
+    if cfg.clock != "wall" and not cfg.clock.startswith("tcp://"):
+        raise ConfigError(
+            f"--clock={cfg.clock}: give wall, or the tcp://HOST:PORT a twin started with --clock=sim printed"
+        )
     _check_run_dir(cfg)
     if cfg.push_to_hub and cfg.repo_id is None:
         raise ConfigError("--push_to_hub needs --repo_id=USER/NAME naming the Hub dataset repo to publish to")
@@ -155,9 +159,14 @@ def adopt_plan(cfg: EvalConfig) -> Path:
     return source
 
 
-def connect(robot: Robot) -> None:
+def connect(robot: Robot, clock: str = "wall") -> None:
+    """Connect `robot` running on `clock` (--clock), its cameras then read on that clock."""
+    from lerobot_contrast.spine.clock import use_clock
+
+    chosen = use_clock(clock)  # a twin's clock that does not answer is one line before the robot connects
     try:
         robot.connect()
+        chosen.watch(robot)
     except Exception as error:
         # The type the user gave (so101_follower), not the class's name, which LeRobot shares (so_follower).
         given = getattr(getattr(robot, "config", None), "type", robot.name)

@@ -14,8 +14,6 @@ from contextlib import suppress
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
-from lerobot.utils.robot_utils import precise_sleep
-
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
@@ -25,6 +23,7 @@ from lerobot_contrast.contrast.trial import Outcome, TrialContext
 from lerobot_contrast.operators.base import Label, Operator, SessionStopped, Staging
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver
+from lerobot_contrast.spine.clock import robot_clock
 
 try:
     from termios import error as TermiosError
@@ -190,13 +189,14 @@ class RobotRunner:
             observer.start(context, features, self.pose_keys)
         if self.operator is not None:
             self.operator.running()
-        start = time.perf_counter()
+        clock = robot_clock()  # real time, or the twin's simulated clock (--clock)
+        start = clock.now()
         steps, path, ended_by, observation = 0, [], "max_steps", None
         try:
             observation = _robot_call(self.robot.get_observation)
             self._extend(path, observation)
             while steps < self.max_steps:
-                tick = time.perf_counter()
+                tick = clock.now()
                 ended_by = self._interrupted(tick - start, observation)
                 if ended_by is not None:
                     break
@@ -209,13 +209,13 @@ class RobotRunner:
                 ended_by = self._finished(context)
                 if ended_by is not None:
                     break
-                precise_sleep(self.period - (time.perf_counter() - tick))
+                clock.sleep(self.period - (clock.now() - tick))
             else:
                 ended_by = "max_steps"
         except _LinkLost as lost:
             ended_by = "disconnected"
             self._recover(lost.__cause__, observation)
-        return Episode(steps, path, time.perf_counter() - start, ended_by)
+        return Episode(steps, path, clock.now() - start, ended_by)
 
     def _interrupted(self, elapsed: float, observation: dict[str, Any]) -> str | None:
         if self.max_episode_s is not None and elapsed >= self.max_episode_s:

@@ -22,6 +22,7 @@ from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.staging import locate, overlay
 from lerobot_contrast.staging.homography import CameraCalibration
 
@@ -66,6 +67,11 @@ class Bench:
         self.recording, self.run_dir = recording, run_dir
 
     def frame(self, robot: Any) -> np.ndarray | None:
+        """The camera's image of now (on a simulated clock, of a moment after whatever was just placed)."""
+        robot_clock().look()
+        return self._image(robot)
+
+    def _image(self, robot: Any) -> np.ndarray | None:
         image = robot.get_observation().get(self.calibration.camera)
         return None if image is None else np.asarray(image)
 
@@ -179,7 +185,7 @@ class Bench:
     def frame_to_rerun(self, robot: Any) -> None:
         import rerun as rr
 
-        image = self.frame(robot)
+        image = self._image(robot)  # as it is: a simulated clock stays paused while a person stages
         if image is not None:
             self.recording.log("staging/camera", rr.Image(image))
 

@@ -1,5 +1,6 @@
 """`python -m lerobot_contrast.twin --task=so101_blocks [--robot_id=twin] [--fps=30] [--width=640 --height=480]
-[--lens_k1=-0.3] [--camera_port=5555] [--control_port=5556] [--seed=0] [--faults.*]`: start the virtual SO-101,
+[--lens_k1=-0.3] [--camera_port=5555] [--control_port=5556] [--clock=wall|sim] [--clock_port=5557] [--seed=0]
+[--faults.*]`: start the virtual SO-101,
 print its endpoints and the flags to give eval, and run until Ctrl-C or SIGTERM."""
 
 from __future__ import annotations
@@ -42,6 +43,8 @@ def main(argv: Sequence[str] | None = None) -> int:
               f"{config.lens_k1:g})")  # fmt: skip
         print(f"placement: {endpoints['placement']} (python -m lerobot_contrast.twin.place OBJECT X Y [YAW])")
         print(f"calibration: {endpoints['calibration']}")
+        clock = endpoints.get("clock")
+        print(f"clock: {clock} (simulated: it moves when eval advances it)" if clock else "clock: wall (real time)")
         print(f"eval flags: {twin.eval_flags()}", flush=True)
         while not stopping.wait(0.5) and twin.failure is None:
             pass

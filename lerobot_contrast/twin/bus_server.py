@@ -18,6 +18,7 @@ MAX_LENGTH = 250  # the SDK's longest packet
 TICK_S = 0.005  # how often the bus process steps its servos and trades state with the twin
 START_TIMEOUT_S = 60
 SILENT_S = 60  # how long the port stays open, answering nothing, after the twin dies
+DRAIN_POLL_S = 0.0002
 
 
 def checksum(body: bytes) -> int:
@@ -74,6 +75,7 @@ class BusServer:
         self._fds: list[int] = []
         self._last_step = time.monotonic()
         self._child = None
+        self._serving = threading.Lock()  # held while bytes read from the port are answered
         self.silent = False  # the servos have no power: instruction packets get no reply
 
     def start(self) -> str:
@@ -146,14 +148,25 @@ class BusServer:
             ready, _, _ = select.select([master, wake], [], [])
             if wake in ready:
                 return
-            buffer += os.read(master, 4096)
-            packets = take_packets(buffer)
-            for k, (servo_id, instruction, params) in enumerate(packets):
-                # The driver sends its next packet only once it has the reply or has given up waiting, so a packet
-                # with another behind it was given up on: its late reply would be read as the next one's answer.
-                reply = self.answer(servo_id, instruction, params, reply=k == len(packets) - 1 and not buffer)
-                if reply:
-                    os.write(master, reply)
+            with self._serving:
+                buffer += os.read(master, 4096)
+                packets = take_packets(buffer)
+                for k, (servo_id, instruction, params) in enumerate(packets):
+                    # The driver sends its next packet only once it has the reply or has given up waiting, so a
+                    # packet with another behind it was given up on: its late reply would be read as the next one's.
+                    reply = self.answer(servo_id, instruction, params, reply=k == len(packets) - 1 and not buffer)
+                    if reply:
+                        os.write(master, reply)
+
+    def drain(self) -> None:
+        """Return once every byte written to the port so far has been acted on (served on a thread here): on the
+        simulated clock, the driver's last goals reach the servos before time moves on."""
+        master = self._fds[0]
+        while True:
+            with self._serving:
+                if not select.select([master], [], [], 0)[0]:
+                    return
+            time.sleep(DRAIN_POLL_S)
 
     def answer(self, servo_id: int, instruction: int, params: bytes, reply: bool = True) -> bytes:
         """The bytes the bus sends back for one instruction packet (status packets, after faults); with `reply`

@@ -5,7 +5,6 @@ understands language: against it, a learned policy's losses on the perturbations
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping
 from typing import Any
 
@@ -13,6 +12,7 @@ from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.domains.task_file import FileTask
 from lerobot_contrast.policies.base import PolicyArgs, PolicyError
 from lerobot_contrast.so101 import DEFAULT_PACE, plan
+from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient, TwinError
 
 
@@ -41,7 +41,7 @@ class SO101Demonstrator:
             ) from None
 
     def act(self, observation: Mapping[str, Any]) -> dict[str, float]:
-        now = time.monotonic()
+        now = robot_clock().now()
         if self._start is None:  # the episode's clock starts at its first step, as the motion does
             self._start = now
         return plan.goals_at(self._schedule, now - self._start)

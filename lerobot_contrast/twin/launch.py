@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.ports import free_port
 
-ENDPOINTS = ("bus", "camera", "placement", "calibration", "eval flags")
+ENDPOINTS = ("bus", "camera", "placement", "calibration", "clock", "eval flags")
 
 
 @dataclass
@@ -75,7 +75,7 @@ def running_twin(*flags: str) -> Iterator[RunningTwin]:
     that cannot start is a UserError of one line."""
     with tempfile.TemporaryDirectory() as calibration:
         twin = start_twin(f"--calibration_dir={calibration}", f"--camera_port={free_port()}",
-                          f"--control_port={free_port()}", *flags)  # fmt: skip
+                          f"--control_port={free_port()}", f"--clock_port={free_port()}", *flags)  # fmt: skip
         try:
             yield twin
         finally:

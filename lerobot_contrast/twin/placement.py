@@ -14,86 +14,27 @@ forward, y to the arm's left; every reply has "ok", and "error" with one line wh
 
 from __future__ import annotations
 
-import json
 import math
-import threading
 from typing import Any
 
-import zmq
-
-from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file.schema import TaskSpec
 from lerobot_contrast.so101.scene import object_sizes, start_poses, table_extent
 from lerobot_contrast.twin.physics import Physics
-from lerobot_contrast.twin.placement_client import DEFAULT_PORT, HOST
+from lerobot_contrast.twin.placement_client import DEFAULT_PORT
+from lerobot_contrast.twin.reply_server import ReplyServer, RequestError, number
 
 COMMANDS = ("place", "scene", "board", "remove_board", "reset_arm", "close")
-POLL_MS = 100  # how often the serving thread looks up to see whether it should stop
 
 
-class RequestError(ValueError):
-    """A request the twin cannot carry out; its message is the reply's one-line error."""
-
-
-class PlacementServer:
+class PlacementServer(ReplyServer):
     """Answers placement requests for `physics`, whose world was built from `task`, on `port` of 127.0.0.1."""
 
+    what, flag = "control port", "--control_port"
+
     def __init__(self, physics: Physics, task: TaskSpec, port: int = DEFAULT_PORT) -> None:
-        self.physics, self.task, self.port = physics, task, port
+        super().__init__(port)
+        self.physics, self.task = physics, task
         self.parked = start_poses(task, None)  # where each object waits off the workspace
-        self.address = f"tcp://{HOST}:{port}"
-        self._context = zmq.Context()
-        self._socket = self._context.socket(zmq.REP)
-        self._socket.setsockopt(zmq.LINGER, 0)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-        self._closing = False
-
-    def start(self) -> str:
-        """Bind (a port in use is one line saying so) and serve on a daemon thread; returns the address."""
-        try:
-            self._socket.bind(self.address)
-        except zmq.ZMQError as error:
-            self._socket.close()
-            self._context.term()
-            raise UserError(
-                f"control port {self.port} on {HOST}: {error.strerror}; choose a free one with --control_port"
-            ) from None
-        self._thread = threading.Thread(target=self._serve, name="twin-placement", daemon=True)
-        self._thread.start()
-        return self.address
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._socket.close()
-        self._context.term()
-
-    def _serve(self) -> None:
-        while not self._stop.is_set():
-            if not self._socket.poll(POLL_MS):
-                continue
-            self._socket.send_string(json.dumps(self.answer(self._socket.recv())))
-            if self._closing:  # after the reply: from now on the port answers nobody
-                self._socket.close()
-                return
-
-    def answer(self, message: bytes) -> dict[str, Any]:
-        """The reply to one request, as sent back."""
-        try:
-            request = json.loads(message)
-            if not isinstance(request, dict):
-                raise ValueError
-        except ValueError:
-            return _error('malformed request: send one JSON object, e.g. {"cmd": "scene"}')
-        try:
-            return {"ok": True, **self.handle(request)}
-        except RequestError as error:
-            return _error(str(error))
-        except Exception as error:  # the socket must keep answering: a dead thread would leave the client waiting
-            return _error(f"{request.get('cmd')} failed in the twin: {' '.join(str(error).split())[:200]}")
 
     def handle(self, request: dict[str, Any]) -> dict[str, Any]:
         command = request.get("cmd")
@@ -114,7 +55,7 @@ class PlacementServer:
         if command == "board":
             from lerobot_contrast.twin.board import add_board
 
-            x, y, yaw_deg = (_number(request, key) for key in ("x", "y", "yaw_deg"))
+            x, y, yaw_deg = (number(request, key) for key in ("x", "y", "yaw_deg"))
             self.physics.edit(lambda spec: add_board(spec, x, y, yaw_deg))
         elif command == "remove_board":
             from lerobot_contrast.twin.board import remove_board
@@ -133,8 +74,8 @@ class PlacementServer:
             raise RequestError(f"unknown object {name!r}; the twin's task {self.task.name} has: {', '.join(objects)}")
         if not objects[name].movable:
             raise RequestError(f"{name} is fixed in the task file (movable: false); it cannot be placed")
-        x, y = _number(request, "x"), _number(request, "y")
-        yaw = _number(request, "yaw") if "yaw" in request else 0.0
+        x, y = number(request, "x"), number(request, "y")
+        yaw = number(request, "yaw") if "yaw" in request else 0.0
         half = object_sizes(self.task)[name] / 2
         (x0, x1), (y0, y1) = table_extent(self.task)
         if not (x0 + half <= x <= x1 - half and y0 + half <= y <= y1 - half):
@@ -160,14 +101,3 @@ class PlacementServer:
             and self.task.objects[other].movable
             and math.hypot(ox - x, oy - y) < (sizes[name] + sizes[other]) / 2
         ]
-
-
-def _number(request: dict[str, Any], key: str) -> float:
-    value = request.get(key)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise RequestError(f"{request.get('cmd')}: {key!r} must be a finite number, got {value!r}")
-    return float(value)
-
-
-def _error(message: str) -> dict[str, Any]:
-    return {"ok": False, "error": message}

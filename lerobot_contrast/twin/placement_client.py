@@ -24,8 +24,8 @@ class TwinError(UserError):
 class PlacementClient:
     """Requests to the twin at `address`, each answered within `timeout_s` or a TwinError saying no twin answers."""
 
-    def __init__(self, address: str = DEFAULT_ADDRESS, timeout_s: float = 5.0) -> None:
-        self.address, self.timeout_s = address, timeout_s
+    def __init__(self, address: str = DEFAULT_ADDRESS, timeout_s: float = 5.0, what: str = "placement") -> None:
+        self.address, self.timeout_s, self.what = address, timeout_s, what
         self._context = zmq.Context.instance()
         self._socket = self._connect()
 
@@ -43,7 +43,7 @@ class PlacementClient:
             self._socket = self._connect()  # a REQ socket that missed its reply cannot send again
             raise TwinError(
                 f"no twin answers on {self.address} within {self.timeout_s:g} s; start it with "
-                "`python -m lerobot_contrast.twin` or give the placement address it printed"
+                f"`python -m lerobot_contrast.twin` or give the {self.what} address it printed"
             )
         reply = json.loads(self._socket.recv())
         if check and not reply.get("ok"):
@@ -63,6 +63,11 @@ class PlacementClient:
         """The true scene, and each object's height (m): what tells an object resting from one held in the gripper."""
         reply = self.ask({"cmd": "scene"})
         return Scene({name: Pose(*pose) for name, pose in reply["objects"].items()}), reply["z"]
+
+    def time(self) -> float:
+        """The twin's simulated time (s): real time on the wall clock (lagging it on a busy machine), the time its
+        clients advanced it on the simulated one."""
+        return float(self.ask({"cmd": "scene"})["time"])
 
     def poses(self) -> dict[str, tuple[float, float, float, float]]:
         """Each object's (x, y, z, yaw), as the demonstrator plans from them."""

@@ -15,6 +15,7 @@ from lerobot_contrast.domains.task_file.world import sample_scene
 from lerobot_contrast.twin.faults import FaultsConfig
 
 CAMERA_NAME = "front"
+CLOCKS = ("wall", "sim")
 
 
 def joint_offsets(names: tuple[str, ...], degrees: float, seed: int) -> dict[str, float]:
@@ -38,6 +39,12 @@ class TwinConfig:
     calibration_dir: Path | None = None
     # Frames per second the camera publishes: the control rate.
     fps: int = 30
+    # wall: the world runs in real time, as a real arm does (what shows LeRobot's deadlines are met). sim: it moves
+    # only when a client advances it (give eval the --clock it prints): as fast as the machine allows, and the same
+    # results however busy the machine is.
+    clock: str = "wall"
+    # The port of the simulated clock's socket on 127.0.0.1 (--clock=sim).
+    clock_port: int = 5557
     # Camera frame width in pixels.
     width: int = 640
     # Camera frame height in pixels.
@@ -57,14 +64,21 @@ class TwinConfig:
 
     def check(self) -> None:
         """Raise one line for a flag no twin can start with (checked before anything binds or loads)."""
-        for flag in ("camera_port", "control_port"):
+        if self.clock not in CLOCKS:
+            raise UserError(f"--clock={self.clock}: give wall (real time) or sim (advanced by its clients)")
+        ports = (
+            ("camera_port", "control_port", "clock_port") if self.clock == "sim" else ("camera_port", "control_port")
+        )
+        for flag in ports:
             port = getattr(self, flag)
             if not 1 <= port <= 65535:
                 raise UserError(f"--{flag}={port} is not a port: give one from 1 to 65535")
         if not 0 <= self.joint_offset_deg <= 10:
             raise UserError(f"--joint_offset_deg={self.joint_offset_deg:g}: give degrees from 0 to 10")
-        if self.camera_port == self.control_port:
-            raise UserError(f"--camera_port and --control_port are both {self.camera_port}: give two ports")
+        for k, first in enumerate(ports):
+            for second in ports[k + 1 :]:
+                if getattr(self, first) == getattr(self, second):
+                    raise UserError(f"--{first} and --{second} are both {getattr(self, first)}: give two ports")
         for flag in ("fps", "width", "height"):
             if getattr(self, flag) < 1:
                 raise UserError(f"--{flag}={getattr(self, flag)}: give a whole number above 0")
@@ -95,6 +109,8 @@ class Twin:
         self.task = load_task_file(config.task).spec
         # Before MuJoCo loads and compiles (seconds): a twin already running is the usual reason a port is taken.
         check_port(config.control_port, "control port", "--control_port")
+        if config.clock == "sim":
+            check_port(config.clock_port, "clock port", "--clock_port")
         if camera:
             check_port(config.camera_port, "camera port", "--camera_port")
         scene = sample_scene(self.task, np.random.default_rng(config.seed))
@@ -105,6 +121,8 @@ class Twin:
             spec, self.bank, self.task.objects, joint_offsets(arm.MOTOR_NAMES, config.joint_offset_deg, config.seed)
         )
         self.with_camera = camera
+        self.simulated = config.clock == "sim"
+        self.camera = None
         self.endpoints: dict[str, str] = {}
         self.cameras_flag = ""
         self._running: list = []
@@ -126,15 +144,28 @@ class Twin:
             self._running.append(placement)
             if self.with_camera:
                 self.endpoints["camera"] = self._start_camera()
-            bus = BusServer(self.bank, self.config.faults)
+            # On the simulated clock the bus is served here, its servos stepped with the physics: nothing else
+            # runs while a client waits on the bus, so its replies meet LeRobot's deadlines without a process.
+            bus = BusServer(self.bank, self.config.faults, process=not self.simulated)
             self.endpoints["bus"] = bus.start()
             self._running.append(bus)
-            self.physics.start()
-            self._running.append(self.physics)
+            if self.simulated:
+                self.endpoints["clock"] = self._start_clock(bus)
+            else:
+                self.physics.start()
+                self._running.append(self.physics)
         except BaseException:
             self.stop()
             raise
         return self.endpoints
+
+    def _start_clock(self, bus) -> str:
+        from lerobot_contrast.twin.clock_server import ClockServer
+
+        clock = ClockServer(self.physics, bus, self.camera, self.config.fps, self.config.clock_port)
+        address = clock.start()
+        self._running.append(clock)
+        return address
 
     def _start_camera(self) -> str:
         from lerobot_contrast.twin.camera import CameraArgs
@@ -146,8 +177,10 @@ class Twin:
         args = CameraArgs(config.width, config.height)
         lens = LensArgs(k1=config.lens_k1, seed=config.seed)
         target = ((x0 + x1) / 2, (y0 + y1) / 2, 0.0)
-        server = serve_camera(self.physics.read, target, args, lens, CAMERA_NAME, config.camera_port, config.fps)
+        server = serve_camera(self.physics.read, target, args, lens, CAMERA_NAME, config.camera_port, config.fps,
+                              paced=not self.simulated)  # fmt: skip
         self._running.append(server)
+        self.camera = server
         self.cameras_flag = robot_cameras(server, args)
         return server.address
 
@@ -172,4 +205,6 @@ class Twin:
             flags.append(f"--robot.calibration_dir={config.calibration_dir}")
         if "camera" in self.endpoints:
             flags.append(f"--robot.cameras='{self.cameras_flag}'")
+        if "clock" in self.endpoints:
+            flags.append(f"--clock={self.endpoints['clock']}")
         return " ".join(flags)

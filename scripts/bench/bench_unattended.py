@@ -6,14 +6,15 @@ judge takes each trial's instance and targets from what the evaluator says it ru
 truth of an outcome from the moment the episode ended, before the arm lets go.
 
     .venv/bin/python scripts/bench/bench_unattended.py [--bases=3] [--joint_offset_deg=D] [--task=so101_blocks]
-        [--perturbations=L,SB] [--episode_s=S] [--seed=0] [--work=DIR]
+        [--perturbations=L,SB] [--episode_s=S] [--seed=0] [--clock=sim|wall] [--work=DIR]
 
 `--work=DIR` keeps the run and the judge's records there: run again with the same DIR to resume a session that
 stopped (a kill, a bus that stopped answering), the figures counting every trial once. Prints the confusion table
 of the camera's labels against the truth, then on its last line: unattended_share=... labelled_by_camera=...
 label_agreement=... placement_median_cm=... placement_p95_cm=... camera_error_p95_cm=... person_calls=...
-staging_s_per_trial=... trials_per_hour=... trials=... (trials per hour of the session's wall time, counted
-from the first trial's staging to the last label, resumes included)
+staging_s_per_trial=... trials_per_hour=... trials=... clock=... wall_s=... (trials per hour of the twin's time,
+counted from the first trial's staging to the last label, resumes included: the bench's hours on the wall clock, the
+robot's on the simulated one; wall_s: this machine's seconds for the whole benchmark)
 """
 
 from __future__ import annotations
@@ -59,8 +60,10 @@ class Judge(Operator):
         self.person: Counter = Counter()  # trial -> times a person was needed (calls and labels asked)
         self.calls: Counter = Counter()  # trial -> times the arm called a person to the bench while staging
         self.truth_at_end: tuple = (None, set())
-        self.session_s = 0.0  # wall seconds of every labelled trial, from the one before it (or the session's start)
-        self._clock = time.monotonic()
+        # The twin's seconds of every labelled trial, from the one before it (or the session's start): the bench's
+        # time, real on the wall clock, the robot's on the simulated one (where no machine's speed enters it).
+        self.session_s = 0.0
+        self._clock = self.placement.time()
         if records.is_file():
             for line in records.read_text().splitlines():
                 self._keep(json.loads(line), write=False)
@@ -78,7 +81,7 @@ class Judge(Operator):
             self.truth_at_end = (scene, lifted)
         if kind == "labelled":
             truth = self.plan.judge(self.instance, *self.truth_at_end)
-            now = time.monotonic()
+            now = self.placement.time()
             spent, self._clock = now - self._clock, now
             self._keep({"kind": "label", "trial": self.index, "camera": message["success"], "truth": truth,
                         "sure": message["sure"], "s": spent})  # fmt: skip
@@ -174,6 +177,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--episode_s", type=float, default=EPISODE_S,
                         help=f"each episode's length (default {EPISODE_S:g}: the demonstrator's pick and place)")  # fmt: skip
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--clock", choices=("sim", "wall"), default="sim",
+                        help="the twin's clock: sim (as fast as the machine allows, the same under load) or wall")  # fmt: skip
     parser.add_argument(
         "--work", type=Path, default=None, help="where the run and the judge's records go; again to resume"
     )
@@ -184,8 +189,9 @@ def main(argv: list[str] | None = None) -> int:
     work.mkdir(parents=True, exist_ok=True)
     run_dir = work / "run"
     try:
+        began = time.monotonic()
         with running_twin(f"--task={args.task}", f"--joint_offset_deg={args.joint_offset_deg}",
-                          f"--seed={args.seed}") as twin:  # fmt: skip
+                          f"--seed={args.seed}", f"--clock={args.clock}") as twin:  # fmt: skip
             table = calibrate_table(twin, args.task, work / "table.calibration.json")
             eval_argv = [f"--task={args.task}", *shlex.split(twin.robot_flags), "--operator=arm",
                          "--policy.type=so101_demonstrator", f"--policy.options={{placement: {twin.placement}}}",
@@ -212,6 +218,7 @@ def main(argv: list[str] | None = None) -> int:
     print(confusion(judge))
     print(f"eval exit {code}; bases={args.bases} joint_offset_deg={args.joint_offset_deg:g} "
           f"episode_s={args.episode_s:g} run: {run_dir}")  # fmt: skip
+    said.update(clock=args.clock, wall_s=f"{time.monotonic() - began:.0f}")
     print(" ".join(f"{key}={value}" for key, value in said.items()))
     return 0
 

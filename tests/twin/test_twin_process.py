@@ -173,11 +173,13 @@ def test_one_command_starts_a_bench_lerobot_connects_to_and_sigterm_stops(tmp_pa
              "--width=160", "--height=120", "--fps=5"]  # fmt: skip
     twin = subprocess.Popen(twin_command(*flags), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        lines = [twin.stdout.readline() for _ in range(5)]
-        assert [line.split(":")[0] for line in lines] == ["bus", "camera", "placement", "calibration", "eval flags"]
+        lines = [twin.stdout.readline() for _ in range(6)]
+        assert [line.split(":")[0] for line in lines] == ["bus", "camera", "placement", "calibration", "clock",
+                                                          "eval flags"]  # fmt: skip
+        assert lines[4] == "clock: wall (real time)\n"
         port = lines[0].split()[1]
-        assert f"--robot.port={port} --robot.id=twin --robot.calibration_dir={tmp_path}" in lines[4]
-        assert f"port: {camera_port}" in lines[4] and "type: zmq" in lines[4]
+        assert f"--robot.port={port} --robot.id=twin --robot.calibration_dir={tmp_path}" in lines[5]
+        assert f"port: {camera_port}" in lines[5] and "type: zmq" in lines[5] and "--clock" not in lines[5]
         assert (tmp_path / "twin.json").is_file()
 
         config = SO101FollowerConfig(port=port, id="twin", calibration_dir=tmp_path)
