@@ -192,9 +192,10 @@ class ArmOperator:
                 trouble[name] = "to take off the workspace, and the task has no tray in the arm's reach"
                 continue
             aim = self._tray_spot(name, view) if goal is None else self._aim(goal)
+            others = [(at.x, at.y) for other, at in view.seen.items() if other != name and not at.held]
             try:
-                steps = reach.pick_and_place(self.motion.model, self.motion.joints(), seen.pose(), self.size, aim)
-
+                steps = reach.pick_and_place(self.motion.model, self.motion.joints(), seen.pose(), self.size, aim,
+                                             avoid=others)  # fmt: skip
             except reach.Unreachable:
                 trouble[name] = "out of reach"
                 continue
@@ -205,8 +206,10 @@ class ArmOperator:
                 dropped[name] = dropped.get(name, 0) + 1
                 if dropped[name] >= 2:
                     trouble[name] = "dropped twice"
-            else:
+            elif math.dist(aim, (landed.x, landed.y)) <= AIM_MAX_M:
                 self.landings.append((aim, (landed.x, landed.y)))
+            # Further from its aim, it was pushed, not carried (a pick that missed): no measure of the aim, and the
+            # next round picks it again from where it lies.
         return trouble
 
     def _aim(self, goal: Pose) -> tuple[float, float]:

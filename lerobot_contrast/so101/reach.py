@@ -8,7 +8,7 @@ a QP solver to the twin's dependencies for the same five-joint problem."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -20,6 +20,10 @@ from lerobot_contrast.so101 import arm
 ARM_JOINTS = arm.MOTOR_NAMES[:5]
 SITE = "gripperframe"  # on the fixed jaw's tip; its x axis points out of the fingertips, its z axis across the jaws
 FIXED_PAD = "fixed_jaw_pad"
+MOVING_PAD = "moving_jaw_pad"
+# A pad coming down this far (m) from a neighbour's centre clears it (half a cube, the pad, a margin); nearer, the
+# heading whose pads keep furthest away is taken, else the pad lands on the neighbour or pushes the object into it.
+PAD_CLEARANCE = 0.03
 ITERATIONS = 1500  # converged poses stop early; at the edge of reach 300 left the jaws 1.2 mm off (a cube not lifted)
 DAMPING = 1e-3
 ORIENTATION_DAMPING = 0.05  # larger: some turns (the roll, for pointing down) barely move the axis they steer
@@ -168,9 +172,10 @@ def headings(yaw: float) -> list[float]:
     return [yaw + k * math.pi / 2 for k in range(4)]
 
 
-def _best(model, point, grip, above, yaw, seed) -> tuple[dict[str, float], dict[str, float], float]:
-    """Grasp and hover poses for the heading across the faces, reachable at both heights, that turns the wrist
-    least from `seed`."""
+def _best(model, point, grip, above, yaw, seed, avoid) -> tuple[dict[str, float], dict[str, float], float]:
+    """Grasp and hover poses for the heading across the faces, reachable at both heights, whose open pads come down
+    clear of the objects at `avoid` ((x, y) each), turning the wrist least from `seed`; where no heading is clear,
+    the one whose pads come down furthest from them."""
     found = []
     for across in headings(yaw):
         try:
@@ -180,7 +185,25 @@ def _best(model, point, grip, above, yaw, seed) -> tuple[dict[str, float], dict[
             continue
     if not found:
         raise Unreachable(f"no top-down grasp of the object at ({grip[0]:.3f}, {grip[1]:.3f}) m is reachable")
-    return min(found, key=lambda found: abs(found[0]["wrist_roll"] - seed["wrist_roll"]))
+
+    def rank(option) -> tuple[float, float]:
+        clearance = min(_pad_clearance(model, option[0], avoid), PAD_CLEARANCE)
+        return -clearance, abs(option[0]["wrist_roll"] - seed["wrist_roll"])
+
+    return min(found, key=rank)
+
+
+def _pad_clearance(model: mujoco.MjModel, joints: Mapping[str, float], avoid: Sequence[tuple[float, float]]) -> float:
+    """How near (m, on the table's plane) the open jaws' pads at `joints` come to the nearest centre of `avoid`."""
+    if not avoid:
+        return math.inf
+    data = mujoco.MjData(model)
+    for name in ARM_JOINTS:
+        data.qpos[model.joint(name).qposadr[0]] = joints[name]
+    data.qpos[model.joint(arm.GRIPPER).qposadr[0]] = OPEN
+    mujoco.mj_kinematics(model, data)
+    pads = [data.geom(pad).xpos[:2] for pad in (FIXED_PAD, MOVING_PAD)]
+    return min(math.dist(pad, other) for pad in pads for other in avoid)
 
 
 def pick_and_place(
@@ -189,15 +212,17 @@ def pick_and_place(
     obj: tuple[float, float, float, float],
     size: float,
     target: tuple[float, float],
+    avoid: Sequence[tuple[float, float]] = (),
 ) -> list[Waypoint]:
     """Waypoints that take the object at `obj` (x, y, z of its centre, yaw; world frame) of width `size` and put it
-    down at `target` (x, y), starting from joint angles `start`; each waypoint's joint goals come from the IK."""
+    down at `target` (x, y), starting from joint angles `start`; each waypoint's joint goals come from the IK. The
+    jaws come down across the faces whose pads keep clear of the objects at `avoid` ((x, y) each)."""
     x, y, z, yaw = obj
     point = grasp_point(model, size)
     opened, closed = OPEN, jaw_angle(model, size) - SQUEEZE
     grip = np.array([x, y, z + GRASP_ABOVE_CENTRE])
     above = grip + [0.0, 0.0, HOVER]
-    at_grasp, hover, across = _best(model, point, grip, above, yaw, start)
+    at_grasp, hover, across = _best(model, point, grip, above, yaw, start, avoid)
     carry_at = np.array([target[0], target[1], CARRY_HEIGHT])
     release = np.array([target[0], target[1], size / 2 + RELEASE_DROP])
     lift = solve(model, point, np.array([x, y, CARRY_HEIGHT]), None, hover)

@@ -24,6 +24,7 @@ def connected_arm(twin: RunningTwin, table: Path, task_name: str) -> tuple[Any, 
     from lerobot_contrast.operators.arm_memory import ArmMemory
     from lerobot_contrast.operators.console import Answers, OperatorConsole
     from lerobot_contrast.spine.build import make_robot, register_robots
+    from lerobot_contrast.spine.clock import use_clock
     from lerobot_contrast.spine.config import EvalConfig
     from lerobot_contrast.spine.flags import parse_config
     from lerobot_contrast.staging.setup import make_bench
@@ -32,6 +33,7 @@ def connected_arm(twin: RunningTwin, table: Path, task_name: str) -> tuple[Any, 
     flags = [f"--task={task_name}", *shlex.split(twin.robot_flags), f"--staging.calibration={table}"]
     cfg = parse_config(EvalConfig, [*flags, "--staging.viewer=none"])
     robot = make_robot(cfg)
+    clock = use_clock(cfg.clock)  # the twin's, where it was started with --clock=sim
     for attempt in range(CONNECT_TRIES):
         try:
             robot.connect()
@@ -40,6 +42,7 @@ def connected_arm(twin: RunningTwin, table: Path, task_name: str) -> tuple[Any, 
             if attempt == CONNECT_TRIES - 1:
                 raise
             robot.bus.disconnect(disable_torque=False)
+    clock.watch(robot)
     task = load_task(task_name)
     camera = make_bench(cfg.staging, cfg.task, task, robot, "distance", lambda: None)
     person = OperatorConsole(Answers(io.StringIO("")), Console(file=io.StringIO()))  # nobody at the bench

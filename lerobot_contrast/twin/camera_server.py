@@ -27,6 +27,9 @@ logger = logging.getLogger(__name__)
 
 JPEG_QUALITY = 80  # what LeRobot's own image_server sends
 CAPTURE_TIMEOUT_S = 60  # a frame the camera's thread has not published by then: that thread is stuck
+# Unpaced, the paused instant's frame goes out again this often: well inside the second after which LeRobot's camera
+# calls a frame too old, and rarely enough that decoding the repeats costs the client little.
+REPEAT_S = 0.25
 
 
 @dataclass
@@ -66,8 +69,8 @@ class CameraServer:
     `close()` (if given) runs on that thread when it stops, to free what `render` made there (a GL context).
 
     Unpaced (the simulated clock), it renders only when `capture` asks, and between captures sends the last frame
-    again `fps` times a second: the world is paused, and LeRobot's camera counts a frame older than a second as a
-    dead camera's."""
+    again every REPEAT_S: the world is paused, and LeRobot's camera counts a frame older than a second as a dead
+    camera's."""
 
     def __init__(self, render: Callable[[], np.ndarray], name: str = "front", port: int = 5555, fps: float = 30.0,
                  host: str = "127.0.0.1", close: Callable[[], None] | None = None,
@@ -151,7 +154,7 @@ class CameraServer:
         sent, _ = self._publish(socket, 0.0)  # the first instant's: LeRobot's camera waits for a frame to connect
         while not self._stop.is_set():
             try:
-                timestamp, done = self._requests.get(timeout=1.0 / self.fps)
+                timestamp, done = self._requests.get(timeout=REPEAT_S)
             except queue.Empty:
                 self._send(socket, sent)
                 continue

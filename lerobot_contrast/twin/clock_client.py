@@ -65,12 +65,14 @@ class SimClock:
         self._cameras = [camera for camera in cameras.values() if hasattr(camera, "latest_frame")]
 
     def _wait_for(self, camera: Any, crc: int) -> None:
-        deadline = time.monotonic() + FRAME_WAIT_S
+        deadline, looked_at = time.monotonic() + FRAME_WAIT_S, None
         while time.monotonic() < deadline:
             with camera.frame_lock:
-                frame = camera.latest_frame
-            if frame is not None and pixels_crc(frame) == crc:
-                return
+                frame, captured = camera.latest_frame, camera.latest_timestamp
+            if captured != looked_at and frame is not None:  # each frame the camera's thread captured, once
+                looked_at = captured
+                if pixels_crc(frame) == crc:
+                    return
             time.sleep(FRAME_POLL_S)
         self.late_frames += 1
         print(f"{camera}: the twin's frame at {self._time:.3f} s did not reach the camera within {FRAME_WAIT_S:g} s; "

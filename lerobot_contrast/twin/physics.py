@@ -35,6 +35,7 @@ class Physics:
         self.lock = threading.RLock()
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
+        self._index()
         self.version = 0  # counts recompilations (edit), so a renderer knows to rebuild
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -45,9 +46,11 @@ class Physics:
             self.data.ctrl[self.model.actuator(name).id] = angle
         mujoco.mj_forward(self.model, self.data)
 
-    @property
-    def substeps(self) -> int:
-        return max(1, round(CONTROL_DT / self.model.opt.timestep))
+    def _index(self) -> None:
+        """Each motor's actuator and joint position in the compiled model (looked up by name once, not each tick)."""
+        self._actuator = {name: self.model.actuator(name).id for name in arm.MOTOR_NAMES}
+        self._qpos = {name: self.model.joint(name).qposadr[0] for name in arm.MOTOR_NAMES}
+        self.substeps = max(1, round(CONTROL_DT / self.model.opt.timestep))
 
     def tick(self) -> None:
         """One control period: the servos' profiles, then the physics under their setpoints, then the measurement."""
@@ -60,9 +63,9 @@ class Physics:
         }
         with self.lock:
             for name, angle in targets.items():
-                self.data.ctrl[self.model.actuator(name).id] = angle
+                self.data.ctrl[self._actuator[name]] = angle
             mujoco.mj_step(self.model, self.data, nstep=self.substeps)
-            measured = {n: float(self.data.qpos[self.model.joint(n).qposadr[0]]) for n in arm.MOTOR_NAMES}
+            measured = {n: float(self.data.qpos[self._qpos[n]]) for n in arm.MOTOR_NAMES}
         for name, angle in measured.items():
             self.bank.set_present(name, arm.to_raw(name, angle - self.offsets[name]))
 
@@ -140,6 +143,7 @@ class Physics:
         with self.lock:
             change(self.spec)
             self.model, self.data = self.spec.recompile(self.model, self.data)
+            self._index()
             mujoco.mj_forward(self.model, self.data)
             self.version += 1
 

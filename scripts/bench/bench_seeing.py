@@ -5,10 +5,10 @@ printed board as a person would once, then lays the task's cubes at random, free
 the bins and in the tray, folds the arm aside and looks, `--layouts` times. Nothing here stages or labels: it
 measures the band inside which the camera's verdict on a goal may be wrong (`--arm.uncertainty`).
 
-    .venv/bin/python scripts/bench/bench_seeing.py [--layouts=40] [--joint_offset_deg=0] [--seed=0]
+    .venv/bin/python scripts/bench/bench_seeing.py [--layouts=40] [--joint_offset_deg=0] [--seed=0] [--clock=sim]
 
 Figures last: seen=... unseen=... position_p50_cm=... position_p95_cm=... position_max_cm=... distance_p95_cm=...
-bin_radius_p95_cm=... each_<colour>_p95_cm=... (position: one object's seen position against the truth;
+bin_radius_p95_cm=... each_<colour>_p95_cm=... clock=... (position: one object's seen position against the truth;
 distance: |seen - true| distance between two cubes; bin_radius: |seen - true| distance of a cube in a bin from the
 bin's centre).
 """
@@ -18,13 +18,13 @@ from __future__ import annotations
 import math
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains import load_task
+from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.twin.arm_session import connected_arm
 from lerobot_contrast.twin.launch import running_twin
@@ -52,12 +52,13 @@ def layout(task, rng: np.random.Generator) -> dict[str, tuple[float, float]]:
     return chosen
 
 
-def measure(layouts: int, joint_offset_deg: float, seed: int, work: Path) -> dict[str, list[float]]:
+def measure(layouts: int, joint_offset_deg: float, seed: int, work: Path, clock: str) -> dict[str, list[float]]:
     task = load_task(TASK)
     bins = {name: region for name, region in task.spec.workspace.regions.items() if "bin" in name}
     errors: dict[str, list[float]] = {"position": [], "distance": [], "bin_radius": [], "unseen": []}
     rng = np.random.default_rng(seed)
-    with running_twin(f"--task={TASK}", f"--joint_offset_deg={joint_offset_deg}", f"--seed={seed}") as twin:
+    flags = f"--task={TASK}", f"--joint_offset_deg={joint_offset_deg}", f"--seed={seed}", f"--clock={clock}"
+    with running_twin(*flags) as twin:
         table = calibrate_table(twin, TASK, work / "table.calibration.json")
         placement = PlacementClient(twin.placement)
         robot, arm = connected_arm(twin, table, TASK)
@@ -66,7 +67,7 @@ def measure(layouts: int, joint_offset_deg: float, seed: int, work: Path) -> dic
             for _ in range(layouts):
                 for name, (x, y) in layout(task, rng).items():
                     placement.place(name, x, y, float(rng.uniform(-math.pi, math.pi)))
-                time.sleep(SETTLE_S)
+                robot_clock().sleep(SETTLE_S)
                 truth = placement.scene().objects
                 view = arm._look()
                 seen = {name: (at.x, at.y) for name, at in view.seen.items() if not at.held}
@@ -93,12 +94,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--layouts", type=int, default=40, help="random layouts of the cubes looked at")
     parser.add_argument("--joint_offset_deg", type=float, default=0.0, help="each joint's calibration off by up to D")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--clock", choices=("sim", "wall"), default="sim", help="the twin's clock")
     args = parser.parse_args(argv)
     if args.layouts < 1 or not 0 <= args.joint_offset_deg <= 10:
         parser.error("--layouts must be at least 1 and --joint_offset_deg within 0-10")
     try:
         with tempfile.TemporaryDirectory() as work:
-            errors = measure(args.layouts, args.joint_offset_deg, args.seed, Path(work))
+            errors = measure(args.layouts, args.joint_offset_deg, args.seed, Path(work), args.clock)
     except UserError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -117,6 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     }
     for name in sorted(key for key in errors if key.endswith("_cube")):
         figures[f"each_{name.removesuffix('_cube')}_p95_cm"] = cm(errors[name], 95)
+    figures["clock"] = args.clock
     print(" ".join(f"{key}={value}" for key, value in figures.items()))
     return 0
 

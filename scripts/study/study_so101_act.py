@@ -6,7 +6,7 @@ left it; the report compares the two.
 
     python scripts/study/study_so101_act.py --checkpoint=DIR --output=DIR [--n_instances=30] [--max_episode_s=12]
         [--policies=act,demonstrator] [--compare=DIR --policies=ab] [--placement_error=none]
-        [--width=160 --height=120]
+        [--width=160 --height=120] [--clock=sim|wall]
 
 With `--policies=ab`, --checkpoint and --compare (a second ACT: more data, or trained longer) run one interleaved
 session (`--policies=A,B` of the evaluator) on the same bases, stopped as soon as the sequential test tells them
@@ -18,7 +18,8 @@ what a policy that cannot read keys on.
 
 The twin's camera renders at the checkpoint's own frame size (what the policy was recorded with); without ACT,
 at --width x --height. The report covers every policy's run in the folder, so the two runs may be made apart.
-Prints `runs=.. trials=.. wall_s=.. report=..` last."""
+The twin runs on its simulated clock by default (as fast as the machine allows, the same under load); `--clock=wall`
+rehearses in real time. Prints `runs=.. trials=.. wall_s=.. clock=.. report=..` last."""
 
 from __future__ import annotations
 
@@ -114,6 +115,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="which of act, demonstrator and ab (--checkpoint against --compare, interleaved) to run")  # fmt: skip
     parser.add_argument("--placement_error", default="none", help="the scripted operator's: none or normal:SIGMA")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--clock", choices=("sim", "wall"), default="sim",
+                        help="the twin's clock: sim (as fast as the machine allows, the same under load) or wall")  # fmt: skip
     parser.add_argument("--width", type=int, default=160, help="the camera's frame without a checkpoint")
     parser.add_argument("--height", type=int, default=120)
     args = parser.parse_args(argv)
@@ -147,7 +150,8 @@ def main(argv: list[str] | None = None) -> int:
     width, height = (args.width, args.height) if args.checkpoint is None else frame_size(args.checkpoint)
     began = time.monotonic()
     runs = [args.output / policy for policy in args.policies]
-    flags = ["--task=so101_red_left", f"--seed={args.seed}", "--fps=30", f"--width={width}", f"--height={height}"]
+    flags = ["--task=so101_red_left", f"--seed={args.seed}", "--fps=30", f"--width={width}", f"--height={height}",
+             f"--clock={args.clock}"]  # fmt: skip
     try:
         with running_twin(*flags) as twin:
             placement, storage = (
@@ -175,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     if "ab" in args.policies:  # the interleaved session's own report: the paired comparison and when it was decided
         subprocess.run([sys.executable, "-m", "lerobot_contrast.report", str(args.output / "ab")], check=True)
     print(f"runs={len(runs)} trials={sum(trials(r) for r in runs)} wall_s={time.monotonic() - began:.0f} "
-          f"report={report / 'report.md'}")  # fmt: skip
+          f"clock={args.clock} report={report / 'report.md'}")  # fmt: skip
     return 0
 
 

@@ -25,7 +25,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def bench(tmp_path_factory):
     work = tmp_path_factory.mktemp("arm")
-    with running_twin("--task=so101_blocks") as twin:
+    with running_twin("--task=so101_blocks", "--clock=sim") as twin:
         yield twin, calibrate_table(twin, "so101_blocks", work / "table.calibration.json"), work
 
 
@@ -36,7 +36,6 @@ def test_the_camera_sees_a_cube_in_a_bin_and_one_held_in_the_gripper(bench):
     placement = PlacementClient(twin.placement)
     placement.place("red_cube", 0.30, 0.18, 0.3)  # inside the left bin
     placement.place("blue_cube", 0.28, -0.05, 0.0)
-    time.sleep(1.0)
     robot, operator = connected_arm(twin, table, "so101_blocks")
     try:
         view = operator._look()

@@ -47,6 +47,7 @@ def test_the_loops_scripts_answer_bad_flags_in_one_line(script, flags, said, tmp
     assert done.stderr.count("\n") == 1
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_record_train_act_and_evaluate_it_on_the_twin(tmp_path):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset

@@ -123,6 +123,7 @@ def test_joint_goals_become_lerobots_action():
     assert action == pytest.approx({"shoulder_pan.pos": 30.0, "gripper.pos": 100.0})
 
 
+@pytest.mark.realtime
 def test_the_real_time_thread_keeps_to_the_clock_and_says_why_it_stops(blocks, capsys):
     bank = ServoBank(arm.MOTORS, arm.rest_raw(), limits=arm.raw_limits())
     physics = Physics(build_spec(blocks), bank, blocks.objects)

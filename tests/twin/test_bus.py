@@ -15,6 +15,7 @@ LIMITS = {name: (800, 3300) for name in NAMES} | {"wrist_roll": (0, 4095), "grip
 OFFSETS = {name: 150 * k - 300 for k, name in enumerate(NAMES)}  # negative ones exercise the sign-magnitude encoding
 START = {"shoulder_pan": 2050, "shoulder_lift": 1200, "elbow_flex": 3000, "wrist_flex": 2048, "wrist_roll": 1500,
          "gripper": 2100}  # fmt: skip
+pytestmark = pytest.mark.realtime  # LeRobot's reply deadlines against a bus whose servos step in real time
 POSE = {"shoulder_pan.pos": 30.0, "shoulder_lift.pos": -40.0, "elbow_flex.pos": 45.0, "wrist_flex.pos": -10.0,
         "wrist_roll.pos": 90.0, "gripper.pos": 80.0}  # fmt: skip
 

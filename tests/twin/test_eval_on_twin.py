@@ -77,6 +77,7 @@ def journal(run_dir: Path) -> list[dict]:
     return [json.loads(line) for line in (run_dir / "journal.jsonl").read_text().splitlines()]
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_a_contrast_set_runs_on_the_twin_and_a_killed_twin_resumes_with_nothing_lost(tmp_path, policy):
     run_dir = tmp_path / "run"

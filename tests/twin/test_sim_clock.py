@@ -15,11 +15,11 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.ports import free_port
 from lerobot_contrast.spine.clock import WallClock, robot_clock, use_clock
 from lerobot_contrast.twin.camera_server import pixels_crc
+from lerobot_contrast.twin.clock_server import ClockServer
 from lerobot_contrast.twin.launch import running_twin
 from lerobot_contrast.twin.placement_client import PlacementClient
 from lerobot_contrast.twin.process import TwinConfig
 
-pytestmark = pytest.mark.slow
 POSE = {"shoulder_pan.pos": 20.0, "shoulder_lift.pos": -30.0, "elbow_flex.pos": 40.0, "wrist_flex.pos": 60.0,
         "wrist_roll.pos": 0.0, "gripper.pos": 30.0}  # fmt: skip
 SMALL = ("--clock=sim", "--width=160", "--height=120")
@@ -69,6 +69,7 @@ def rehearse(steps: int = 45) -> list[tuple]:
             robot.disconnect()
 
 
+@pytest.mark.slow
 def test_the_world_moves_only_when_the_clock_advances_it():
     with running_twin(*SMALL) as twin:
         robot = connected_robot(twin)
@@ -92,6 +93,7 @@ def test_the_world_moves_only_when_the_clock_advances_it():
             robot.disconnect()
 
 
+@pytest.mark.slow
 def test_the_same_advances_give_the_same_readings_and_frames_beside_a_cpu_hog():
     idle = rehearse()
     hogs = [multiprocessing.get_context("spawn").Process(target=hog, daemon=True) for _ in range(2)]
@@ -124,3 +126,39 @@ def test_a_clock_nobody_serves_is_one_line():
 def test_bad_clock_flags_are_one_line(config, error):
     with pytest.raises(UserError, match=re.escape(error)):
         config.check()
+
+
+class Counted:
+    """What the clock server drives, counting what it is asked: physics ticks, bus drains, camera captures."""
+
+    def __init__(self):
+        self.ticks, self.drains, self.captures = 0, 0, []
+
+    def tick(self):
+        self.ticks += 1
+
+    def drain(self):
+        self.drains += 1
+
+    def capture(self, instant):
+        self.captures.append(instant)
+        return len(self.captures)
+
+
+def test_the_clock_steps_the_time_asked_and_draws_a_frame_at_each_frame_instant():
+    world = Counted()
+    server = ClockServer(world, world, world, fps=30, port=free_port())
+    try:
+        replies = [server.answer(b'{"cmd": "advance", "seconds": 0.03333333333333333}') for _ in range(30)]
+        assert world.ticks == 100 and world.drains == 30  # 1 s at 100 Hz, the bus drained before each step
+        assert [r["frame"] for r in replies] == list(range(1, 31)) and replies[-1]["time"] == pytest.approx(1.0)
+        moving = server.answer(b'{"cmd": "advance", "seconds": 0.5, "frame": false}')  # the arm moving itself
+        assert moving == {"ok": True, "time": pytest.approx(1.5), "frame": None} and len(world.captures) == 30
+        assert server.answer(b'{"cmd": "advance", "seconds": 0.004}')["frame"] == 31  # the frame instant passed
+        assert server.answer(b'{"cmd": "time"}') == {"ok": True, "time": pytest.approx(1.504)}
+        assert world.ticks == 150
+        refused = server.answer(b'{"cmd": "advance", "seconds": -1}')
+        assert refused == {"ok": False, "error": "advance: 'seconds' must be from 0 to 600, got -1"}
+        assert server.answer(b'{"cmd": "rewind"}')["error"].startswith("unknown command 'rewind'")
+    finally:
+        server.stop()

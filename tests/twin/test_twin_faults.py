@@ -49,6 +49,7 @@ def test_a_bus_that_never_answers_is_one_line_and_leaves_no_run(bench, tmp_path)
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_reads_that_fail_past_lerobots_retries_abort_the_trial_with_lerobots_reason(tmp_path):
     policy = save_so101_act(tmp_path / "act")

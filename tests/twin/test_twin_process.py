@@ -164,6 +164,7 @@ def test_a_port_in_use_is_one_line_before_the_model_loads(tmp_path):
     assert not (tmp_path / "twin.json").exists()
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_one_command_starts_a_bench_lerobot_connects_to_and_sigterm_stops(tmp_path):
     from lerobot.robots.so_follower import SO101Follower, SO101FollowerConfig
