@@ -20,6 +20,7 @@ FLAGS = {
     "huge n_instances": (["--n_instances=99999999999999999999999", "--dry_run=true"], "more than 10000 base trials"),
     "huge repeats": (["--repeats=99999999999999999999", "--dry_run=true"], "more than 10000 base trials"),
     "zero max_episode_s": (["--max_episode_s=0"], "--max_episode_s must be a positive number, got 0"),
+    "clock not an address": (["--clock=sim"], "--clock=sim: give wall, or the tcp://HOST:PORT a twin started with"),
     "negative max_episode_s": (["--max_episode_s=-1"], "--max_episode_s must be a positive number, got -1"),
     "nan max_episode_s": (["--max_episode_s=nan"], "--max_episode_s must be a positive number, got nan"),
     "zero fps": (["--fps=0"], "--fps must be a positive number, got 0"),

@@ -4,8 +4,9 @@ clock, idle and beside a CPU hog that keeps every core busy. Each session's jour
 
     .venv/bin/python scripts/bench/bench_sim_clock.py [--bases=3] [--seed=0] [--work=DIR] [--hogs=N]
 
-Prints each session's figures, then on its last line: wall_clock_s=... sim_clock_s=... speedup=... (wall seconds of
-the session on each clock; their ratio) sim_hog_s=... sim_identical=... (the simulated clock's journals idle and
+Prints each session's figures, then on its last line: wall_clock_s=... sim_clock_s=... speedup=... (this machine's
+seconds for the evaluation's session on each clock, and their ratio) bench_speedup=... (the same for the whole
+benchmark, the twin's start and the camera's calibration included) sim_hog_s=... sim_identical=... (the simulated clock's journals idle and
 under load: the same statuses, labels, placements to the millimetre and robot seconds) wall_sim_agree=...
 (the same statuses and labels on both clocks) wall_sim_placement_diff_cm=... (the largest difference in where a
 trial's staging measured an object) late_frames=...
@@ -21,7 +22,6 @@ import re
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from lerobot_contrast.spine.flags import ScriptParser
@@ -38,18 +38,20 @@ def hog() -> None:
         pass
 
 
-def session(clock: str, work: Path, bases: int, seed: int) -> tuple[float, dict[str, str]]:
-    """Run (or resume) the unattended benchmark on `clock` in `work`; its wall seconds and its figures."""
-    began = time.monotonic()
-    command = [sys.executable, str(BENCH), f"--bases={bases}", f"--seed={seed}", f"--clock={clock}", f"--work={work}"]
-    done = subprocess.run(command, capture_output=True, text=True)
-    seconds = time.monotonic() - began
-    (work / "bench.log").write_text(done.stdout + done.stderr)
-    lines = done.stdout.strip().splitlines()
-    if done.returncode != 0 or not lines:
-        raise SystemExit(f"error: the {clock} session failed (exit {done.returncode}); see {work / 'bench.log'}")
-    print(f"{clock} ({work}): {lines[-1]}", flush=True)
-    return seconds, dict(pair.split("=", 1) for pair in lines[-1].split())
+def session(clock: str, work: Path, bases: int, seed: int) -> dict[str, str]:
+    """Run the unattended benchmark on `clock` in `work` (a finished one is read back); its figures."""
+    log = work / "bench.log"
+    if not log.is_file() or "session_s=" not in log.read_text():
+        command = [sys.executable, str(BENCH), f"--bases={bases}", f"--seed={seed}", f"--clock={clock}",
+                   f"--work={work}"]  # fmt: skip
+        done = subprocess.run(command, capture_output=True, text=True)
+        work.mkdir(parents=True, exist_ok=True)
+        log.write_text(done.stdout + done.stderr)
+        if done.returncode != 0:
+            raise SystemExit(f"error: the {clock} session failed (exit {done.returncode}); see {log}")
+    last = log.read_text().strip().splitlines()[-1]
+    print(f"{clock} ({work}): {last}", flush=True)
+    return dict(pair.split("=", 1) for pair in last.split())
 
 
 def canonical(value, digits: int = 4):
@@ -83,18 +85,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--bases", type=int, default=3, help="base instances of the contrast set")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--hogs", type=int, default=os.cpu_count() or 2, help="busy processes beside the third run")
-    parser.add_argument("--work", type=Path, default=None, help="where the three sessions go; again to resume")
+    parser.add_argument("--work", type=Path, default=None, help="where the three sessions go; a finished one is kept")
     args = parser.parse_args(argv)
     if args.bases < 1 or args.hogs < 1:
         parser.error("--bases and --hogs must be at least 1")
     work = args.work or Path(tempfile.mkdtemp(prefix="bench_sim_clock_"))
-    wall_s, wall = session("wall", work / "wall", args.bases, args.seed)
-    sim_s, sim = session("sim", work / "sim", args.bases, args.seed)
+    wall = session("wall", work / "wall", args.bases, args.seed)
+    sim = session("sim", work / "sim", args.bases, args.seed)
     hogs = [multiprocessing.get_context("spawn").Process(target=hog, daemon=True) for _ in range(args.hogs)]
     for process in hogs:
         process.start()
     try:
-        hog_s, _ = session("sim", work / "sim_hog", args.bases, args.seed)
+        hog = session("sim", work / "sim_hog", args.bases, args.seed)
     finally:
         for process in hogs:
             process.terminate()
@@ -102,8 +104,10 @@ def main(argv: list[str] | None = None) -> int:
     identical = [canonical(r) for r in journals["sim"]] == [canonical(r) for r in journals["sim_hog"]]
     outcomes = {name: [(r["status"], r["success"]) for r in records] for name, records in journals.items()}
     late = sum(len(re.findall(LATE, (work / name / "bench.log").read_text())) for name in ("sim", "sim_hog"))
-    print(f"wall: {wall}\nsim: {sim}")
-    print(f"wall_clock_s={wall_s:.0f} sim_clock_s={sim_s:.0f} speedup={wall_s / sim_s:.2f} sim_hog_s={hog_s:.0f} "
+    wall_s, sim_s = float(wall["session_s"]), float(sim["session_s"])
+    bench_ratio = float(wall["wall_s"]) / float(sim["wall_s"])
+    print(f"wall_clock_s={wall_s:.0f} sim_clock_s={sim_s:.0f} speedup={wall_s / sim_s:.2f} "
+          f"bench_speedup={bench_ratio:.2f} sim_hog_s={hog['session_s']} "
           f"sim_identical={str(identical).lower()} wall_sim_agree={str(outcomes['wall'] == outcomes['sim']).lower()} "
           f"wall_sim_placement_diff_cm={staged_diff_cm(journals['wall'], journals['sim']):.2f} late_frames={late}")  # fmt: skip
     return 0

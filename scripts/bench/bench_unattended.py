@@ -12,9 +12,10 @@ truth of an outcome from the moment the episode ended, before the arm lets go.
 stopped (a kill, a bus that stopped answering), the figures counting every trial once. Prints the confusion table
 of the camera's labels against the truth, then on its last line: unattended_share=... labelled_by_camera=...
 label_agreement=... placement_median_cm=... placement_p95_cm=... camera_error_p95_cm=... person_calls=...
-staging_s_per_trial=... trials_per_hour=... trials=... clock=... wall_s=... (trials per hour of the twin's time,
-counted from the first trial's staging to the last label, resumes included: the bench's hours on the wall clock, the
-robot's on the simulated one; wall_s: this machine's seconds for the whole benchmark)
+staging_s_per_trial=... trials_per_hour=... trials=... clock=... session_s=... wall_s=... (trials per hour of the
+twin's time, counted from the first trial's staging to the last label, resumes included: the bench's hours on the wall
+clock, the robot's on the simulated one; session_s: this machine's seconds for the evaluation's runs, resumes
+included; wall_s: for the whole benchmark, the twin's start and the camera's calibration too)
 """
 
 from __future__ import annotations
@@ -203,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
                 eval_argv.append(f"--perturbations={args.perturbations}")
             judge = Judge(Plan(eval_argv), PlacementClient(twin.placement), PlacementError(), args.seed, "accept",
                           records=work / "judge.jsonl")  # fmt: skip
-            code = 0
+            code, session_began = 0, time.monotonic()
             for _ in range(RESUMES + 1):  # a bus that stops answering on a loaded machine ends it resumably
                 if complete(run_dir):
                     break
@@ -211,6 +212,7 @@ def main(argv: list[str] | None = None) -> int:
                 if resume:
                     print(f"bench_unattended: resuming {run_dir}", flush=True)
                 code = run_answered([*eval_argv, *resume], judge, (OperatorError,))
+            session_s = time.monotonic() - session_began
         said = figures(judge, run_dir)
     except (UserError, OperatorError) as error:
         print(f"error: {error}", file=sys.stderr)
@@ -218,7 +220,7 @@ def main(argv: list[str] | None = None) -> int:
     print(confusion(judge))
     print(f"eval exit {code}; bases={args.bases} joint_offset_deg={args.joint_offset_deg:g} "
           f"episode_s={args.episode_s:g} run: {run_dir}")  # fmt: skip
-    said.update(clock=args.clock, wall_s=f"{time.monotonic() - began:.0f}")
+    said.update(clock=args.clock, session_s=f"{session_s:.0f}", wall_s=f"{time.monotonic() - began:.0f}")
     print(" ".join(f"{key}={value}" for key, value in said.items()))
     return 0
 

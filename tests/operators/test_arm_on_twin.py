@@ -1,5 +1,6 @@
 """The arm as its own operator on the twin, as on the bench: LeRobot's so101_follower and zmq camera, the table
-calibrated from the printed board. The camera locates a cube in a bin and one held in the gripper; a session runs
+calibrated from the printed board, the twin on its simulated clock. The camera locates a cube in a bin and one held
+in the gripper; the arm brings the spare cube in from the tray and takes it back with nobody called; a session runs
 with the twin's placement socket closed (nothing reads the truth) and, killed while the arm stages, resumes with
 nothing lost and nothing counted twice."""
 
@@ -13,6 +14,7 @@ import time
 import numpy as np
 import pytest
 
+from lerobot_contrast.domains import load_task
 from lerobot_contrast.twin.arm_session import connected_arm
 from lerobot_contrast.twin.launch import running_twin
 from lerobot_contrast.twin.placement_client import PlacementClient, TwinError
@@ -50,6 +52,40 @@ def test_the_camera_sees_a_cube_in_a_bin_and_one_held_in_the_gripper(bench):
         assert held.seen["blue_cube"].held
         assert np.hypot(held.seen["blue_cube"].x - truth[0], held.seen["blue_cube"].y - truth[1]) < 0.03
         operator.motion.open_and_withdraw()
+    finally:
+        robot.disconnect()
+
+
+def trial(index: int, scene, current):
+    from lerobot_contrast.contrast.instance import Instance
+    from lerobot_contrast.contrast.trial import TrialContext
+
+    goal = {"predicate": {"subject": "red_cube", "near": "green_cube", "within": 0.05}}
+    instance = Instance(f"tray-{index}", "next_to", "put the red cube next to the green cube", scene, goal, "tray")
+    return TrialContext(index, instance, instance, current, 0.21, "in_place", np.random.default_rng(index), 2)
+
+
+def test_the_arm_brings_the_spare_in_from_the_tray_and_takes_it_back_with_no_person(bench):
+    from lerobot_contrast.contrast.scene import Pose, Scene
+
+    twin, table, _ = bench
+    placement = PlacementClient(twin.placement)
+    tray = load_task("so101_blocks").spec.workspace.tray
+    for name, (x, y) in {"red_cube": (0.26, 0.06), "green_cube": (0.32, -0.04), "blue_cube": (0.39, 0.07)}.items():
+        placement.place(name, x, y, 0.0)
+    placement.place("yellow_cube", *tray.middle, 0.0)
+    without = Scene({name: Pose(*placement.poses()[name][:2]) for name in ("red_cube", "green_cube", "blue_cube")})
+    with_spare = without.with_object("yellow_cube", Pose(0.36, -0.07))
+    robot, operator = connected_arm(twin, table, "so101_blocks")
+    try:
+        assert operator.stage(trial(0, with_spare, without)).action == "ready"
+        brought = placement.poses()["yellow_cube"]
+        assert np.hypot(brought[0] - 0.36, brought[1] + 0.07) < 0.02  # on its target, from the tray
+        assert operator.stage(trial(1, without, with_spare)).action == "ready"
+        back = placement.poses()["yellow_cube"]
+        assert tray.contains(back[0], back[1]) and back[2] < 0.03  # put down in the tray
+        assert operator.calls == 0  # nobody was rung
+        assert "yellow_cube" not in operator._look().scene(without).objects  # waiting in the tray, off the workspace
     finally:
         robot.disconnect()
 
