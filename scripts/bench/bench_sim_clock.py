@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     for process in hogs:
         process.start()
     try:
-        hog = session("sim", work / "sim_hog", args.bases, args.seed)
+        loaded = session("sim", work / "sim_hog", args.bases, args.seed)
     finally:
         for process in hogs:
             process.terminate()
@@ -107,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
     wall_s, sim_s = float(wall["session_s"]), float(sim["session_s"])
     bench_ratio = float(wall["wall_s"]) / float(sim["wall_s"])
     print(f"wall_clock_s={wall_s:.0f} sim_clock_s={sim_s:.0f} speedup={wall_s / sim_s:.2f} "
-          f"bench_speedup={bench_ratio:.2f} sim_hog_s={hog['session_s']} "
+          f"bench_speedup={bench_ratio:.2f} sim_hog_s={loaded["session_s"]} "
           f"sim_identical={str(identical).lower()} wall_sim_agree={str(outcomes['wall'] == outcomes['sim']).lower()} "
           f"wall_sim_placement_diff_cm={staged_diff_cm(journals['wall'], journals['sim']):.2f} late_frames={late}")  # fmt: skip
     return 0
