@@ -86,7 +86,7 @@ def frames(cfg: CalibrateConfig) -> dict[str, np.ndarray]:
 
 
 def camera_frames(robot: Any) -> dict[str, np.ndarray]:
-    from lerobot_contrast.spine.clock import robot_clock
+    from lerobot_contrast.clock.robot_clock import robot_clock
 
     robot_clock().look()  # a frame of the board as it now lies
     observation = robot.get_observation()

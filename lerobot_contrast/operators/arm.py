@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from lerobot_contrast.clock.robot_clock import robot_clock
 from lerobot_contrast.contrast.audited import audited
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.task import Judgement
@@ -27,7 +28,6 @@ from lerobot_contrast.operators.base import Label, SessionStopped, Staging
 from lerobot_contrast.operators.verdict import verdict
 from lerobot_contrast.so101 import plan, reach
 from lerobot_contrast.so101.motion import ArmMotion, Stopped
-from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.staging import seeing
 from lerobot_contrast.staging.check import Bench
 

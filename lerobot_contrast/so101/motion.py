@@ -11,9 +11,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from lerobot_contrast.clock.robot_clock import robot_clock
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.so101 import arm, reach
-from lerobot_contrast.spine.clock import robot_clock
 
 STEP_HZ = 30.0  # goals sent this often while moving: LeRobot's own teleoperation rate
 SETTLE_S = 0.3  # after the last goal, the servos close the rest of the way

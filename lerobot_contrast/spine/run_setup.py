@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from lerobot_contrast.clock.robot_clock import check_clock
 from lerobot_contrast.contrast.cost import CostModel, RobotTimeCost
 from lerobot_contrast.contrast.stopping import StopRule
 from lerobot_contrast.contrast.strategy import PlannedTrial, make_plan
@@ -60,10 +61,7 @@ def validate(cfg: EvalConfig) -> None:
         raise ConfigError(f"--operator: unknown mode {cfg.operator!r}; choose from: {', '.join(OPERATORS)}")
     _check_policy_args(cfg)
     parse_lanes(cfg.lanes)
-    if cfg.clock != "wall" and not cfg.clock.startswith("tcp://"):
-        raise ConfigError(
-            f"--clock={cfg.clock}: give wall, or the tcp://HOST:PORT a twin started with --clock=sim printed"
-        )
+    check_clock(cfg.clock)
     _check_run_dir(cfg)
     if cfg.push_to_hub and cfg.repo_id is None:
         raise ConfigError("--push_to_hub needs --repo_id=USER/NAME naming the Hub dataset repo to publish to")
@@ -161,7 +159,7 @@ def adopt_plan(cfg: EvalConfig) -> Path:
 
 def connect(robot: Robot, clock: str = "wall") -> None:
     """Connect `robot` running on `clock` (--clock), its cameras then read on that clock."""
-    from lerobot_contrast.spine.clock import use_clock
+    from lerobot_contrast.clock.robot_clock import use_clock
 
     chosen = use_clock(clock)  # a twin's clock that does not answer is one line before the robot connects
     try:

@@ -14,6 +14,7 @@ from contextlib import suppress
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
+from lerobot_contrast.clock.robot_clock import robot_clock
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
@@ -23,7 +24,6 @@ from lerobot_contrast.contrast.trial import Outcome, TrialContext
 from lerobot_contrast.operators.base import Label, Operator, SessionStopped, Staging
 from lerobot_contrast.policies.base import Policy
 from lerobot_contrast.record.observer import EpisodeObserver
-from lerobot_contrast.spine.clock import robot_clock
 
 try:
     from termios import error as TermiosError

@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
+from lerobot_contrast.clock.robot_clock import robot_clock
 from lerobot_contrast.contrast.cost import CostModel
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.trial import TrialContext
-from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.staging import locate, overlay
 from lerobot_contrast.staging.homography import CameraCalibration
 

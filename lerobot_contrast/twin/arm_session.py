@@ -18,13 +18,13 @@ def connected_arm(twin: RunningTwin, table: Path, task_name: str) -> tuple[Any, 
     """(robot, ArmOperator) on `twin`, connected; the caller disconnects the robot."""
     from rich.console import Console
 
+    from lerobot_contrast.clock.robot_clock import use_clock
     from lerobot_contrast.domains import load_task
     from lerobot_contrast.operators.arm import ArmOperator
     from lerobot_contrast.operators.arm_args import ArmArgs
     from lerobot_contrast.operators.arm_memory import ArmMemory
     from lerobot_contrast.operators.console import Answers, OperatorConsole
     from lerobot_contrast.spine.build import make_robot, register_robots
-    from lerobot_contrast.spine.clock import use_clock
     from lerobot_contrast.spine.config import EvalConfig
     from lerobot_contrast.spine.flags import parse_config
     from lerobot_contrast.staging.setup import make_bench

@@ -11,7 +11,6 @@ import queue
 import sys
 import threading
 import time
-import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -19,6 +18,7 @@ import cv2
 import numpy as np
 import zmq
 
+from lerobot_contrast.clock.simulated import pixels_crc
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.twin.camera import CameraArgs, TwinCamera
 from lerobot_contrast.twin.lens import LensArgs
@@ -57,11 +57,6 @@ def jpeg_of(frame: np.ndarray) -> np.ndarray:
 
 def message(name: str, jpeg: np.ndarray, timestamp: float) -> str:
     return json.dumps({"timestamps": {name: timestamp}, "images": {name: base64.b64encode(jpeg).decode("ascii")}})
-
-
-def pixels_crc(image: np.ndarray) -> int:
-    """CRC-32 of an image's pixels: the twin's of a frame it sent, the client's of the frame its camera holds."""
-    return zlib.crc32(np.ascontiguousarray(image).data)
 
 
 class CameraServer:

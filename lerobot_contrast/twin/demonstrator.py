@@ -8,11 +8,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from lerobot_contrast.clock.robot_clock import robot_clock
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.domains.task_file import FileTask
 from lerobot_contrast.policies.base import PolicyArgs, PolicyError
 from lerobot_contrast.so101 import DEFAULT_PACE, plan
-from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementClient, TwinError
 
 

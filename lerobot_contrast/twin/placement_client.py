@@ -4,11 +4,9 @@ truth, so nothing that stages or labels from the camera uses it."""
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
-import zmq
-
+from lerobot_contrast.clock.simulated import NoAnswer, Requests
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 
@@ -24,28 +22,16 @@ class TwinError(UserError):
 class PlacementClient:
     """Requests to the twin at `address`, each answered within `timeout_s` or a TwinError saying no twin answers."""
 
-    def __init__(self, address: str = DEFAULT_ADDRESS, timeout_s: float = 5.0, what: str = "placement") -> None:
-        self.address, self.timeout_s, self.what = address, timeout_s, what
-        self._context = zmq.Context.instance()
-        self._socket = self._connect()
-
-    def _connect(self) -> zmq.Socket:
-        socket = self._context.socket(zmq.REQ)
-        socket.setsockopt(zmq.LINGER, 0)
-        socket.connect(self.address)
-        return socket
+    def __init__(self, address: str = DEFAULT_ADDRESS, timeout_s: float = 5.0) -> None:
+        self.address = address
+        self._requests = Requests(address, timeout_s, "placement")
 
     def ask(self, request: dict[str, Any], check: bool = True) -> dict[str, Any]:
         """The twin's reply; with `check`, a refusal is a TwinError naming the request."""
-        self._socket.send_string(json.dumps(request))
-        if not self._socket.poll(round(self.timeout_s * 1000)):
-            self._socket.close()
-            self._socket = self._connect()  # a REQ socket that missed its reply cannot send again
-            raise TwinError(
-                f"no twin answers on {self.address} within {self.timeout_s:g} s; start it with "
-                f"`python -m lerobot_contrast.twin` or give the {self.what} address it printed"
-            )
-        reply = json.loads(self._socket.recv())
+        try:
+            reply = self._requests.ask(request)
+        except NoAnswer as error:
+            raise TwinError(str(error)) from None
         if check and not reply.get("ok"):
             raise TwinError(f"the twin refused {request}: {reply.get('error')}")
         return reply
@@ -75,7 +61,7 @@ class PlacementClient:
         return {name: (x, y, reply["z"][name], yaw) for name, (x, y, yaw) in reply["objects"].items()}
 
     def close(self) -> None:
-        self._socket.close()
+        self._requests.close()
 
 
 def request(command: dict[str, Any], port: int = DEFAULT_PORT, timeout_s: float = 5.0) -> dict[str, Any]:

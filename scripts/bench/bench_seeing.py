@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from lerobot_contrast.clock.robot_clock import robot_clock
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains import load_task
-from lerobot_contrast.spine.clock import robot_clock
 from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.twin.arm_session import connected_arm
 from lerobot_contrast.twin.launch import running_twin

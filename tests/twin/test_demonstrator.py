@@ -167,7 +167,7 @@ def test_as_an_evaluator_policy_it_carries_out_each_trials_goal_on_the_true_scen
     from lerobot_contrast import PolicyArgs, TrialContext, make_policy
     from lerobot_contrast.twin import demonstrator as policy_module
 
-    clock = [50.0]  # the robot's clock (spine/clock.py), moved by hand
+    clock = [50.0]  # the robot's clock (clock/robot_clock.py), moved by hand
     monkeypatch.setattr(policy_module, "robot_clock", lambda: SimpleNamespace(now=lambda: clock[0]))
     robot = SO101Follower(SO101FollowerConfig(port="unused", id="demo"))
     task = load_task_file("so101_red_left")

@@ -11,10 +11,10 @@ import time
 
 import pytest
 
+from lerobot_contrast.clock.robot_clock import WallClock, robot_clock, use_clock
+from lerobot_contrast.clock.simulated import pixels_crc
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.ports import free_port
-from lerobot_contrast.spine.clock import WallClock, robot_clock, use_clock
-from lerobot_contrast.twin.camera_server import pixels_crc
 from lerobot_contrast.twin.clock_server import ClockServer
 from lerobot_contrast.twin.launch import running_twin
 from lerobot_contrast.twin.placement_client import PlacementClient

@@ -1,14 +1,12 @@
 """The robot's clock: every wait for the robot (an episode's pacing at --fps, the arm's motions and settles, the
 time limits and the robot-time cost) is taken from it. The wall clock by default; with `--clock=ADDRESS` the virtual
 SO-101's simulated clock (`python -m lerobot_contrast.twin --clock=sim`), which moves only when asked
-(twin/clock_client.py). One clock per process, chosen by the command's entry point with `use_clock`."""
+(clock/simulated.py). One clock per process, chosen by the command's entry point with `use_clock`."""
 
 from __future__ import annotations
 
 import time
 from typing import Any, Protocol
-
-from lerobot.utils.robot_utils import precise_sleep
 
 from lerobot_contrast.contrast.errors import UserError
 
@@ -39,6 +37,8 @@ class WallClock:
 
     def sleep(self, seconds: float, watched: bool = True) -> None:
         if seconds > 0:
+            from lerobot.utils.robot_utils import precise_sleep  # LeRobot loads once a robot runs, not with the flags
+
             precise_sleep(seconds)
 
     def look(self) -> None:
@@ -55,15 +55,20 @@ def robot_clock() -> Clock:
     return _clock
 
 
+def check_clock(address: str | None) -> None:
+    """One line for a --clock that names no clock (checked before anything connects)."""
+    if address not in (None, "", WALL) and not address.startswith("tcp://"):
+        raise UserError(f"--clock={address}: give wall, or the tcp://HOST:PORT a twin started with --clock=sim printed")
+
+
 def use_clock(address: str | None) -> Clock:
     """Take every wait from the clock `address` names (wall, or the twin's tcp://HOST:PORT) from now on."""
     global _clock
+    check_clock(address)
     if address in (None, "", WALL):
         _clock = WallClock()
-    elif address.startswith("tcp://"):
-        from lerobot_contrast.twin.clock_client import SimClock
+    else:
+        from lerobot_contrast.clock.simulated import SimClock
 
         _clock = SimClock(address)
-    else:
-        raise UserError(f"--clock={address}: give wall, or the tcp://HOST:PORT a twin started with --clock=sim printed")
     return _clock
