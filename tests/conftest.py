@@ -33,6 +33,16 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.xdist_group("ray"))
 
 
+@pytest.fixture(autouse=True)
+def wall_clock_after():
+    """The robot's clock is chosen once per process (clock/robot_clock.py): a test that put a twin's simulated clock
+    there gives the next test on its worker the wall clock back, not a clock whose twin has stopped."""
+    yield
+    from lerobot_contrast.clock.robot_clock import use_clock
+
+    use_clock("wall")
+
+
 @pytest.fixture
 def hub(monkeypatch, tmp_path):
     """A fresh fake Hub, with every client setting pointed at it; nothing can reach the internet."""

@@ -57,8 +57,8 @@ class EvalConfig:
     # Task families to sample from (default: all of the task's families), e.g. block2block,separate
     # (or [block2block,separate]).
     families: list[str] | None = None
-    # Evaluation strategy: standard (i.i.d., full reset each trial), contrast (Algorithm 1 of the paper), or
-    # limited_intervention (new instructions in the current scene, reset only when infeasible).
+    # standard (i.i.d., full reset each trial), contrast (the paper's Algorithm 1) or limited_intervention
+    # (new instructions, reset when infeasible).
     strategy: str = "contrast"
     # Perturbations the contrast strategy applies after each base instance, in order (default: all of the
     # task's), e.g. LB1,LB2,SB1,SB2.
@@ -95,11 +95,10 @@ class EvalConfig:
     robot: robots.RobotConfig | None = None
     # Control rate in Hz; default: 10 on hardware, as fast as possible on a simulated robot.
     fps: float | None = None
-    # Whose time the robot runs on: wall (real time), or the simulated clock of a virtual SO-101 started with
-    # --clock=sim, at the tcp://HOST:PORT it printed (its eval flags include it).
+    # wall (real time), or the twin's simulated clock: tcp://HOST:PORT, in its eval flags.
     clock: str = "wall"
-    # Who stages and labels: console (a person), arm (the SO-101 itself, its camera labelling; docs: unattended.md)
-    # or auto (the robot stages its own scene, as in simulation). Default: auto where the robot can, else console.
+    # Who stages and labels: console (a person), arm (the SO-101 and its camera; unattended.md) or auto (the robot
+    # stages its own scene). Default: auto where it can, else console.
     operator: str | None = None
     # With --operator=console: each prompt also as a JSON line to this file, FIFO or /dev/fd/N, for a program.
     operator_channel: str | None = None
@@ -128,8 +127,8 @@ class EvalConfig:
     dry_run: bool = False
     # Print a line per trial (not applicable ones included) besides the progress line.
     verbose: bool = False
-    # Simulated trials run side by side, the policy answering every lane in one call, with the same results as
-    # one lane: a number (8 runs the learned default 2.8x faster), or auto (1 for now); always 1 on hardware.
+    # Simulated trials side by side, the policy answering all lanes in one call, each as alone: a number (8: the
+    # learned default 2.8x faster) or auto (1 for now); 1 on hardware.
     lanes: str = "auto"
     # Stopping rules: --stop.width=0.1, --stop.compare=RUN_DIR|hub:USER/NAME, --stop.alpha=0.05.
     stop: StopArgs = field(default_factory=StopArgs)

@@ -25,12 +25,6 @@ POSE = {"shoulder_pan.pos": 20.0, "shoulder_lift.pos": -30.0, "elbow_flex.pos": 
 SMALL = ("--clock=sim", "--width=160", "--height=120")
 
 
-@pytest.fixture(autouse=True)
-def wall_clock_after():
-    yield
-    use_clock("wall")
-
-
 def connected_robot(twin):
     from lerobot_contrast.spine.build import make_robot, register_robots
     from lerobot_contrast.spine.config import EvalConfig
