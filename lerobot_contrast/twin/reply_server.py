@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import threading
+from abc import ABC, abstractmethod
 from typing import Any
 
 import zmq
@@ -20,7 +21,7 @@ class RequestError(ValueError):
     """A request the twin cannot carry out; its message is the reply's one-line error."""
 
 
-class ReplyServer:
+class ReplyServer(ABC):
     """Answers requests with `handle(request)` on `port`; `what` and `flag` name the socket in a bind error."""
 
     what, flag = "port", "--port"
@@ -35,8 +36,9 @@ class ReplyServer:
         self._thread: threading.Thread | None = None
         self._closing = False  # set by a handler: the reply is the socket's last
 
+    @abstractmethod
     def handle(self, request: dict[str, Any]) -> dict[str, Any]:
-        raise NotImplementedError
+        """The reply's fields for one request (the placement's commands, the clock's); a RequestError refuses it."""
 
     def start(self) -> str:
         """Bind (a port in use is one line saying so) and serve on a daemon thread; returns the address."""
