@@ -6,6 +6,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -87,11 +88,21 @@ def disk_full_said(path: Path, then: str) -> Iterator[None]:
 
 def comparable_settings(config: dict[str, Any]) -> dict[str, Any]:
     """The settings two sessions of one run must share: all but where it is written, who operates it, where it
-    is published and the robot's address."""
-    comparable = {k: v for k, v in config.items() if k not in RESUME_FREE_KEYS}
+    is published, the robot's address and any network address (a twin or a server started again answers at
+    another port: `--clock=tcp://...`, a policy's `placement` option)."""
+    comparable = {k: _without_addresses(v) for k, v in config.items() if k not in RESUME_FREE_KEYS}
     if isinstance(comparable.get("robot"), dict):  # the same robot may come back at a new address or port
         comparable["robot"] = {"type": comparable["robot"].get("type")}
     return comparable
+
+
+def _without_addresses(value: Any) -> Any:
+    """`value` with every network address (`scheme://host:port`) read as its scheme alone."""
+    if isinstance(value, Mapping):
+        return {key: _without_addresses(item) for key, item in value.items()}
+    if isinstance(value, str) and re.fullmatch(r"[a-z]+://[^/\s]+:\d+", value):
+        return value.split("://")[0] + "://"
+    return value
 
 
 def open_run_dir(

@@ -42,6 +42,10 @@ CARRY_HEIGHT = 0.10  # m, the grasp point's height while carrying
 RELEASE_DROP = 0.004  # m between the carried object's underside and the table when it is let go
 OPEN = 0.8  # rad, the gripper open around a small object (pads 64 mm apart)
 SQUEEZE = 0.25  # rad past first contact the gripper is told to close: a firm grip, short of the joint's limit
+# The fixed pad comes down this far from the object's face, not touching it: a few degrees of tilt or turn, or a few
+# millimetres of where the camera saw the object, put a pad that skims the face on the object's top edge, pressing it
+# into the table. Closing pushes the object the gap across to the fixed pad.
+PAD_GAP = 0.006
 
 
 @dataclass(frozen=True)
@@ -218,17 +222,20 @@ def pick_and_place(
     down at `target` (x, y), starting from joint angles `start`; each waypoint's joint goals come from the IK. The
     jaws come down across the faces whose pads keep clear of the objects at `avoid` ((x, y) each)."""
     x, y, z, yaw = obj
-    point = grasp_point(model, size)
+    point = grasp_point(model, size)  # where the held object's centre is
+    clear = point + np.array([0.0, 0.0, PAD_GAP])  # ... and where it is while the fixed pad keeps its gap
     opened, closed = OPEN, jaw_angle(model, size) - SQUEEZE
     grip = np.array([x, y, z + GRASP_ABOVE_CENTRE])
     above = grip + [0.0, 0.0, HOVER]
-    at_grasp, hover, across = _best(model, point, grip, above, yaw, start, avoid)
+    at_grasp, hover, across = _best(model, clear, grip, above, yaw, start, avoid)
     carry_at = np.array([target[0], target[1], CARRY_HEIGHT])
     release = np.array([target[0], target[1], size / 2 + RELEASE_DROP])
     lift = solve(model, point, np.array([x, y, CARRY_HEIGHT]), None, hover)
     # Once held, the object turns with the jaws: where they point across no longer matters.
     carried = solve(model, point, carry_at, None, lift)
     lowered = solve(model, point, release, None, carried)
+    cleared = solve(model, clear, release, None, lowered)  # the fixed pad off the object's face before rising
+    withdrawn = solve(model, clear, carry_at, None, cleared)
     return [
         Waypoint("open", {**hover, arm.GRIPPER: opened}, STEPS["open"]),
         Waypoint("descend", {**at_grasp, arm.GRIPPER: opened}, STEPS["descend"]),
@@ -237,7 +244,8 @@ def pick_and_place(
         Waypoint("carry", {**carried, arm.GRIPPER: closed}, STEPS["carry"]),
         Waypoint("lower", {**lowered, arm.GRIPPER: closed}, STEPS["lower"]),
         Waypoint("release", {**lowered, arm.GRIPPER: opened}, STEPS["release"]),
-        Waypoint("retreat", {**carried, arm.GRIPPER: opened}, STEPS["retreat"]),
+        Waypoint("clear", {**cleared, arm.GRIPPER: opened}, STEPS["clear"]),
+        Waypoint("retreat", {**withdrawn, arm.GRIPPER: opened}, STEPS["retreat"]),
         Waypoint("rest", dict(arm.REST), STEPS["rest"]),
     ]
 

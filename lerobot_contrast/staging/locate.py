@@ -27,9 +27,6 @@ MIN_PIXELS = 12  # smaller blobs are noise, or an object mostly hidden (by the a
 # (its top and sides show too); anything else is clutter of the same colour, or the object mostly hidden.
 AREA_RANGE = (0.25, 6.0)
 OUTLINE_POINTS = 16  # per edge of the workspace's outline
-# An object standing inside the workspace shows at least this share of its pixels within the workspace's outline on
-# the table (its top may show past the far edge); a blob mostly past the edge is something beyond it.
-MIN_BASE_SHARE = 0.3
 
 
 def workspace_mask(
@@ -69,13 +66,12 @@ def find_objects(
     """Table (x, y) of each object in `colours` ({name: colour}) seen in the RGB `image`; unseen ones are left out.
     The object is the largest blob of its colour standing on the workspace, seen with the part of it that shows past
     the workspace's far edge (a tall object's top), or, where that merges it with something beyond the edge, without."""
-    base = workspace_mask(calibration, bounds)
-    regions = (workspace_mask(calibration, bounds, height), base)
+    regions = (workspace_mask(calibration, bounds, height), workspace_mask(calibration, bounds))
     found: dict[str, tuple[float, float]] = {}
     for name, colour in colours.items():
         seen = colour_mask(image, colour)
         for region in regions:
-            place = _blob_place(seen & region, base > 0, calibration, height)
+            place = _blob_place(seen & region, bounds, calibration, height)
             if place is not None:
                 found[name] = place
                 break
@@ -83,18 +79,23 @@ def find_objects(
 
 
 def _blob_place(
-    mask: np.ndarray, base: np.ndarray, calibration: CameraCalibration, height: float
+    mask: np.ndarray,
+    bounds: tuple[tuple[float, float], tuple[float, float]],
+    calibration: CameraCalibration,
+    height: float,
 ) -> tuple[float, float] | None:
-    """Where the largest blob in `mask` with enough of it on the workspace's `base` stands, if its size is an
-    object's."""
-    count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
-    on_base = np.bincount(labels[base], minlength=count)
-    standing = [i for i in range(1, count) if on_base[i] >= MIN_BASE_SHARE * stats[i, cv2.CC_STAT_AREA]]
+    """Where the largest blob in `mask` standing on the workspace stands, if its size is an object's. A blob stands
+    on it where its centre does: an object seen from a low camera near the workspace's far edge shows most of its
+    pixels past that edge (its top and the face towards the camera), one beyond the edge its centre past it."""
+    count, _, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    places = calibration.to_table(centroids[1:], height / 2) if count > 1 else np.zeros((0, 2))
+    (x0, y0), (x1, y1) = bounds
+    standing = [i for i in range(1, count) if x0 <= places[i - 1][0] <= x1 and y0 <= places[i - 1][1] <= y1]
     if not standing:
         return None
     best = max(standing, key=lambda i: stats[i, cv2.CC_STAT_AREA])
     area = stats[best, cv2.CC_STAT_AREA]
-    x, y = calibration.to_table(centroids[best][None, :], height / 2)[0]
+    x, y = places[best - 1]
     expected = _footprint_pixels(calibration, x, y, height)
     if area >= MIN_PIXELS and AREA_RANGE[0] * expected <= area <= AREA_RANGE[1] * expected:
         return float(x), float(y)

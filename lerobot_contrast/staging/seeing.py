@@ -47,11 +47,11 @@ class View:
 
     def scene(self, believed: Scene) -> Scene:
         """`believed` with every object on the table where it was seen (held ones stay where they were believed),
-        and none of those waiting in the tray."""
+        and none of those waiting in the tray that `believed` does not have (one it has was pushed into the tray)."""
         objects = dict(believed.objects)
         for name, sighting in self.seen.items():
-            if name in self.waiting:
-                objects.pop(name, None)
+            if name in self.waiting and name not in believed.objects:
+                continue
             elif not sighting.held:
                 objects[name] = Pose(sighting.x, sighting.y, sighting.yaw or 0.0)
         return Scene(objects, believed.robot)

@@ -121,6 +121,17 @@ def test_resume_refuses_changed_settings_and_missing_runs(tmp_path):
         open_run_dir(tmp_path / "nothing", {"seed": 0}, resume=True)
 
 
+def test_resume_on_a_twin_started_again_at_other_ports(tmp_path):
+    """A twin (or any server) started again answers at new ports: its addresses are not settings, what they serve is."""
+    run = tmp_path / "run"
+    then = {"clock": "tcp://127.0.0.1:5557", "policy": {"options": {"placement": "tcp://127.0.0.1:58159"}}}
+    open_run_dir(run, then, resume=False).close()
+    now = {"clock": "tcp://127.0.0.1:6001", "policy": {"options": {"placement": "tcp://127.0.0.1:58021"}}}
+    open_run_dir(run, now, resume=True).close()
+    with pytest.raises(RunDirError, match=r"other settings, --clock=\"wall\""):
+        open_run_dir(run, {**now, "clock": "wall"}, resume=True)
+
+
 def test_an_unwritable_output_dir_names_the_flag(tmp_path):
     blocker = tmp_path / "a_file"
     blocker.write_text("")
