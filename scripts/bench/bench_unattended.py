@@ -1,21 +1,25 @@
 """Unattended sessions on the twin: the arm stages every trial and the camera labels it (`--operator=arm`), judged
 against the twin's truth. Starts its own twin (640x480, wide-angle lens), lays the printed board and calibrates the
 camera as a person would once, takes the board away, then runs a contrast set with the arm as operator; the scripted
-person answers only when the arm rings for one. The twin's truth is read here, by the judge, never by the arm; the
+person answers only when the arm rings for one. With `--operator=console` the same bases run with no arm: the scripted
+person stages every trial and labels it, as the comparison. The twin's truth is read here, by the judge, never by the arm; the
 judge takes each trial's instance and targets from what the evaluator says it runs (the console's channel), and the
 truth of an outcome from the moment the episode ended, before the arm lets go.
 
     .venv/bin/python scripts/bench/bench_unattended.py [--bases=3] [--joint_offset_deg=D] [--task=so101_blocks]
-        [--perturbations=L,SB] [--episode_s=S] [--seed=0] [--clock=sim|wall] [--work=DIR]
+        [--perturbations=L,SB] [--episode_s=S] [--seed=0] [--clock=sim|wall] [--operator=arm|console] [--work=DIR]
 
 `--work=DIR` keeps the run and the judge's records there: run again with the same DIR to resume a session that
 stopped (a kill, a bus that stopped answering), the figures counting every trial once. Prints the confusion table
 of the camera's labels against the truth, then on its last line: unattended_share=... labelled_by_camera=...
 label_agreement=... placement_median_cm=... placement_p95_cm=... camera_error_p95_cm=... person_calls=...
-staging_s_per_trial=... trials_per_hour=... trials=... clock=... session_s=... wall_s=... (trials per hour of the
-twin's time, counted from the first trial's staging to the last label, resumes included: the bench's hours on the wall
-clock, the robot's on the simulated one; session_s: this machine's seconds for the evaluation's runs, resumes
-included; wall_s: for the whole benchmark, the twin's start and the camera's calibration too)
+staging_s_per_trial=... person_s_per_trial=... trials_per_hour=... trials=... operator=... clock=... session_s=...
+wall_s=... (person_s_per_trial: a person's seconds, from the task's reset-time model (its handling time per object
+moved, plus the distance at its hand speed; a label a person gives counts one handling time); trials per hour: of
+the twin's time from the first trial's staging to the last label, resumes included (the bench's hours on the wall
+clock, the robot's on the simulated one), plus the person's modelled seconds; session_s: this machine's seconds for
+the evaluation's runs, resumes included; wall_s: for the whole benchmark, the twin's start and the camera's
+calibration too)
 """
 
 from __future__ import annotations
@@ -60,7 +64,10 @@ class Judge(Operator):
         self.labels: dict[int, tuple[bool, bool, bool]] = {}  # trial -> (camera's label, truth, camera sure)
         self.person: Counter = Counter()  # trial -> times a person was needed (calls and labels asked)
         self.calls: Counter = Counter()  # trial -> times the arm called a person to the bench while staging
+        self.person_s: Counter = Counter()  # trial -> a person's seconds, from the task's reset-time model
+        self.reset_model = self.plan.task.cost_model("reset_time")
         self.truth_at_end: tuple = (None, set())
+        self._ended = self._labelled = None  # the trial whose end was read, and whose label kept
         # The twin's seconds of every labelled trial, from the one before it (or the session's start): the bench's
         # time, real on the wall clock, the robot's on the simulated one (where no machine's speed enters it).
         self.session_s = 0.0
@@ -71,21 +78,28 @@ class Judge(Operator):
 
     def handle(self, message: dict) -> str | None:
         kind = message.get("prompt") or message.get("event")
-        if kind in ("call", "label"):
+        if kind in ("stage", "call", "label"):  # a person at the bench or the keyboard
             self._keep({"kind": "person", "trial": message["trial"], "why": kind})
+        before = self.placement.scene() if kind in ("stage", "call") else None
         answer = super().handle(message)  # the trial's start sets self.index and self.instance
+        if before is not None:
+            self._keep({"kind": "person_s", "trial": self.index, "s": self.reset_model(before, self.placement.scene())})
+        if kind == "label":
+            self._keep({"kind": "person_s", "trial": self.index, "s": self.reset_model.per_object_s})
+        if kind == "trial":
+            self._ended = self._labelled = None
         if kind == "running":
             self._placed()
-        if kind == "ended":
+        if kind == "ended" or (kind == "label" and self._ended != self.index):  # a person labels the scene as left
             scene, heights = self.placement.look()
             lifted = {name for name, z in heights.items() if z - self.resting.get(name, z) > LIFTED_M}
-            self.truth_at_end = (scene, lifted)
-        if kind == "labelled":
+            self.truth_at_end, self._ended = (scene, lifted), self.index
+        if kind == "labelled" or (kind == "label" and self._labelled != self.index):  # the arm's label, or a person's
             truth = self.plan.judge(self.instance, *self.truth_at_end)
             now = self.placement.time()
-            spent, self._clock = now - self._clock, now
-            self._keep({"kind": "label", "trial": self.index, "camera": message["success"], "truth": truth,
-                        "sure": message["sure"], "s": spent})  # fmt: skip
+            spent, self._clock, self._labelled = now - self._clock, now, self.index
+            self._keep({"kind": "label", "trial": self.index, "camera": message.get("success"), "truth": truth,
+                        "sure": message.get("sure", False), "s": spent})  # fmt: skip
         return answer
 
     def _placed(self) -> None:
@@ -103,6 +117,8 @@ class Judge(Operator):
         if record["kind"] == "person":
             self.person[trial] += 1
             self.calls[trial] += record["why"] == "call"
+        elif record["kind"] == "person_s":
+            self.person_s[trial] += record["s"]
         elif record["kind"] == "placed":
             self.placement_m[(trial, record["object"])] = record["off_m"]
             self.staged.setdefault(trial, {})[record["object"]] = record["at"]
@@ -145,6 +161,8 @@ def figures(judge: Judge, run_dir: Path) -> dict[str, str]:
     staging = [r["extra"].get("robot_s", 0.0) for r in done]
     placed = np.array(list(judge.placement_m.values()) or [np.nan]) * 100
     seen = np.array(camera_errors(judge, done) or [np.nan]) * 100
+    person_s = sum(judge.person_s[r["index"]] for r in done)
+    hours = (judge.session_s + person_s) / 3600
     return {
         "unattended_share": f"{len(alone) / len(done):.3f}",
         "labelled_by_camera": f"{len(by_camera) / len(done):.3f}",
@@ -154,7 +172,8 @@ def figures(judge: Judge, run_dir: Path) -> dict[str, str]:
         "camera_error_p95_cm": f"{np.percentile(seen, 95):.2f}",
         "person_calls": str(sum(judge.person.values())),
         "staging_s_per_trial": f"{np.mean(staging):.1f}",
-        "trials_per_hour": f"{len(labels) / (judge.session_s / 3600):.1f}" if judge.session_s else "nan",
+        "person_s_per_trial": f"{person_s / len(done):.1f}",
+        "trials_per_hour": f"{len(labels) / (hours):.1f}" if hours else "nan",
         "trials": str(len(done)),
     }
 
@@ -180,6 +199,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--clock", choices=("sim", "wall"), default="sim",
                         help="the twin's clock: sim (as fast as the machine allows, the same under load) or wall")  # fmt: skip
+    parser.add_argument("--operator", choices=("arm", "console"), default="arm",
+                        help="who stages and labels: the arm (a person only when it calls) or the scripted person")  # fmt: skip
     parser.add_argument(
         "--work", type=Path, default=None, help="where the run and the judge's records go; again to resume"
     )
@@ -194,7 +215,7 @@ def main(argv: list[str] | None = None) -> int:
         with running_twin(f"--task={args.task}", f"--joint_offset_deg={args.joint_offset_deg}",
                           f"--seed={args.seed}", f"--clock={args.clock}") as twin:  # fmt: skip
             table = calibrate_table(twin, args.task, work / "table.calibration.json")
-            eval_argv = [f"--task={args.task}", *shlex.split(twin.robot_flags), "--operator=arm",
+            eval_argv = [f"--task={args.task}", *shlex.split(twin.robot_flags), f"--operator={args.operator}",
                          "--policy.type=so101_demonstrator", f"--policy.options={{placement: {twin.placement}}}",
                          "--strategy=contrast", f"--n_instances={args.bases}", f"--fps={FPS}",
                          f"--max_episode_steps={math.ceil(args.episode_s * FPS)}",
@@ -220,7 +241,9 @@ def main(argv: list[str] | None = None) -> int:
     print(confusion(judge))
     print(f"eval exit {code}; bases={args.bases} joint_offset_deg={args.joint_offset_deg:g} "
           f"episode_s={args.episode_s:g} run: {run_dir}")  # fmt: skip
-    said.update(clock=args.clock, session_s=f"{session_s:.0f}", wall_s=f"{time.monotonic() - began:.0f}")
+    said.update(
+        operator=args.operator, clock=args.clock, session_s=f"{session_s:.0f}", wall_s=f"{time.monotonic() - began:.0f}"
+    )
     print(" ".join(f"{key}={value}" for key, value in said.items()))
     return 0
 
