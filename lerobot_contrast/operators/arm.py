@@ -45,7 +45,8 @@ class ArmOperator:
     ) -> None:
         self.robot, self.task, self.camera, self.person, self.args = robot, task, camera, person, args
         self.seed = seed
-        self.motion = ArmMotion(robot, plan.arm_model(task.spec), args.pace, self._stop_pressed)
+        self.motion = ArmMotion(robot, plan.arm_model(task.spec), args.pace, self._stop_pressed, self._reached)
+        self._staging = False  # while True, each waypoint reached keeps what staging has spent (a kill loses none)
         self.size = camera.geometry.size
         self.memory = memory
         self.context: TrialContext | None = None
@@ -64,6 +65,7 @@ class ArmOperator:
         self._before = self.memory.recall(context.index)  # a run killed mid-staging resumes with what it spent
         self._started, self._person_s, self._person_clock_s, self._trial_calls = robot_clock().now(), 0.0, 0.0, 0
         try:
+            self._staging = True
             with _link("staging"):
                 self.motion.open_and_withdraw()
                 rounds, view = self._place_all(context.instance.scene)
@@ -72,6 +74,8 @@ class ArmOperator:
             self.say(f"[bold red]{stop}[/]")
             self._checkpoint()
             return Staging("stop")
+        finally:
+            self._staging = False
         total = self._checkpoint()
         measured = self._record(context, view, rounds, total)
         return Staging("ready", total.person_s, measured=measured, robot_s=total.robot_s,
@@ -257,6 +261,10 @@ class ArmOperator:
             raise CameraLost()
         jaws = self.motion.jaws(self.size, joints) if self.motion.holding(joints) else None
         return seeing.look(image, self.camera.calibration, self.camera.geometry, jaws, self.motion.links(joints))
+
+    def _reached(self) -> None:
+        if self._staging:
+            self._checkpoint()
 
     def _stop_pressed(self) -> bool:
         return self.person.take_key() == "estop"

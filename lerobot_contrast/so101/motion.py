@@ -29,10 +29,18 @@ class Stopped(UserError):
 
 class ArmMotion:
     """`robot`: a connected so101_follower; `model`: the arm's MuJoCo model (for forward kinematics); `pace`: each
-    motion's time as a multiple of the planned one (larger is slower); `stop`: asked between steps, True halts."""
+    motion's time as a multiple of the planned one (larger is slower); `stop`: asked between steps, True halts;
+    `reached`: called at each waypoint (to keep what the motion has spent so far)."""
 
-    def __init__(self, robot: Any, model: mujoco.MjModel, pace: float, stop: Callable[[], bool]) -> None:
-        self.robot, self.model, self.pace, self.stop = robot, model, pace, stop
+    def __init__(
+        self,
+        robot: Any,
+        model: mujoco.MjModel,
+        pace: float,
+        stop: Callable[[], bool],
+        reached: Callable[[], None] = lambda: None,
+    ) -> None:
+        self.robot, self.model, self.pace, self.stop, self.reached = robot, model, pace, stop, reached
         self.data = mujoco.MjData(model)
         self.moving_s = 0.0  # seconds spent moving, all told
         self.goal: dict[str, float] = {}  # the joint goals last sent (radians)
@@ -79,6 +87,7 @@ class ArmMotion:
         for waypoint in waypoints:
             goal = {name: waypoint.goals.get(name, start[name]) + correction.get(name, 0.0) for name in start}
             self._glide(start, goal, waypoint.seconds * self.pace)
+            self.reached()
             start = goal
         robot_clock().sleep(SETTLE_S)
         self.moving_s += SETTLE_S

@@ -1,8 +1,9 @@
 """The arm as its own operator on the twin, as on the bench: LeRobot's so101_follower and zmq camera, the table
 calibrated from the printed board, the twin on its simulated clock. The camera locates a cube in a bin and one held
-in the gripper; the arm brings the spare cube in from the tray and takes it back with nobody called; a session runs
-with the twin's placement socket closed (nothing reads the truth) and, killed while the arm stages, resumes with
-nothing lost and nothing counted twice."""
+in the gripper; the arm brings the spare cube in from the tray and takes it back with nobody called, and killed
+while it carries the spare, stages it again from where it fell with nothing lost; a session runs with the twin's
+placement socket closed (nothing reads the truth) and, killed while the arm stages, resumes with nothing lost and
+nothing counted twice."""
 
 import json
 import shlex
@@ -88,6 +89,51 @@ def test_the_arm_brings_the_spare_in_from_the_tray_and_takes_it_back_with_no_per
         assert "yellow_cube" not in operator._look().scene(without).objects  # waiting in the tray, off the workspace
     finally:
         robot.disconnect()
+
+
+# Stages trial 0 (the spare brought in from the tray) in a process of its own, keeping what it spends in RUN_DIR.
+STAGE_THE_SPARE = """
+import json, sys, types
+from pathlib import Path
+from lerobot_contrast.contrast.scene import Pose, Scene
+from lerobot_contrast.operators.arm_memory import ArmMemory
+from lerobot_contrast.twin.arm_session import connected_arm
+from tests.operators.test_arm_on_twin import trial
+flags, table, run_dir, scene = sys.argv[1:]
+without = Scene({name: Pose(x, y) for name, (x, y) in json.loads(scene).items()})
+robot, operator = connected_arm(types.SimpleNamespace(robot_flags=flags), Path(table), "so101_blocks")
+operator.memory = ArmMemory(lambda: Path(run_dir))
+staged = operator.stage(trial(0, without.with_object("yellow_cube", Pose(0.36, -0.07)), without))
+print(json.dumps({"action": staged.action, "robot_s": staged.robot_s, "calls": operator.calls}))
+robot.disconnect()
+"""
+
+
+def test_killed_while_carrying_the_spare_the_arm_stages_it_again_with_nothing_lost(bench, tmp_path):
+    twin, table, _ = bench
+    placement = PlacementClient(twin.placement)
+    tray = load_task("so101_blocks").spec.workspace.tray
+    scene = {"red_cube": (0.26, 0.06), "green_cube": (0.32, -0.04), "blue_cube": (0.39, 0.07)}
+    for name, (x, y) in scene.items():
+        placement.place(name, x, y, 0.0)
+    placement.place("yellow_cube", *tray.middle, 0.0)
+    command = [sys.executable, "-c", STAGE_THE_SPARE, twin.robot_flags, str(table), str(tmp_path), json.dumps(scene)]
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 240
+    while placement.poses()["yellow_cube"][2] < 0.05 and time.monotonic() < deadline and child.poll() is None:
+        time.sleep(0.05)
+    assert placement.poses()["yellow_cube"][2] > 0.05, child.communicate()[1][-2000:]  # in the jaws, carried
+    child.send_signal(signal.SIGKILL)
+    child.wait()
+    kept = json.loads((tmp_path / "arm_staging.json").read_text())
+    assert kept["trial"] == 0 and kept["spent"]["robot_s"] > 3  # the withdraw and the way to the tray, kept
+    again = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr[-2000:]
+    staged = json.loads(again.stdout.splitlines()[-1])
+    assert staged["action"] == "ready" and staged["calls"] == 0  # from where it fell, by the arm alone
+    assert staged["robot_s"] > kept["spent"]["robot_s"]  # the killed session's seconds counted in
+    brought = placement.poses()["yellow_cube"]
+    assert np.hypot(brought[0] - 0.36, brought[1] + 0.07) < 0.02 and brought[2] < 0.03
 
 
 def eval_command(twin, table, run_dir, policy, *flags):
