@@ -54,7 +54,8 @@ def arm_model(spec: TaskSpec) -> mujoco.MjModel:
 
 def targets(predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec) -> list[tuple[float, float]]:
     """Where to put the subject down, best first: a bin's middle (then nearer the arm), or beside the base object
-    across one of its faces, clear of the other objects and of the bins' walls, nearest the subject first."""
+    across one of its faces, clear of the other objects and of the bins' walls and on the workspace (a base at its
+    edge is not put beside on the far side, where no camera checks the table), nearest the subject first."""
     regions = spec.workspace.regions
     if "in" in predicate:
         cx, cy = regions[predicate["in"]].middle
@@ -67,10 +68,14 @@ def targets(predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec) -> l
     spots = [(bx + distance * math.cos(h), by + distance * math.sin(h)) for h in reach.headings(byaw)]
     others = [(x, y) for name, (x, y, _, _) in poses.items() if name not in (subject, base)]
     walls = [(r.center, r.radius + sizes[subject]) for r in regions.values() if is_bin(r)]
+    (x0, x1), (y0, y1) = spec.workspace.area.box
+    half = sizes[subject] / 2
     clear = [
         s
         for s in spots
-        if all(math.dist(s, o) >= spec.workspace.min_spacing for o in others)
+        if x0 + half <= s[0] <= x1 - half
+        and y0 + half <= s[1] <= y1 - half
+        and all(math.dist(s, o) >= spec.workspace.min_spacing for o in others)
         and all(math.dist(s, centre) >= reach_out for centre, reach_out in walls)
     ]
     sx, sy = poses[subject][:2]

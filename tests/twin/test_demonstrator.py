@@ -81,6 +81,10 @@ def test_next_to_targets_lie_beside_the_base_within_the_goal(task):
     bin_ = task.spec.workspace.regions["left_bin"]
     spots = plan.targets(goal, poses, task.spec)
     assert spots and all(math.dist(spot, bin_.center) > bin_.radius + 0.03 for spot in spots)
+    poses["red_cube"] = (0.435, 0.0, 0.015, 0.0)  # at the workspace's far edge: not beside it past the edge
+    (_, x_max), _ = task.spec.workspace.area.box
+    spots = plan.targets(goal, poses, task.spec)
+    assert len(spots) == 3 and all(spot[0] <= x_max - 0.015 for spot in spots)
 
 
 def where(server, names) -> list[float]:
