@@ -4,6 +4,7 @@ prints, for the recording script, the benchmark and the tests."""
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import signal
 import subprocess
 import sys
@@ -16,6 +17,17 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.ports import free_port
 
 ENDPOINTS = ("bus", "camera", "placement", "calibration", "clock", "eval flags")
+PR_SET_PDEATHSIG = 1  # Linux's prctl option: a signal for this process when its parent dies
+
+
+def _stop_with_parent() -> typing.Callable[[], None] | None:
+    """What the twin's process runs before it starts, on Linux: ask for a SIGTERM when the process that started it
+    dies, even killed (a benchmark killed with -9 left its twin running, holding its ports and a core). The C
+    library is looked up here, in the parent: nothing but the call runs between fork and exec."""
+    if sys.platform != "linux":
+        return None
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+    return lambda: prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 @dataclass
@@ -53,7 +65,11 @@ def start_twin(*flags: str) -> RunningTwin:
     # A file, not a pipe: nobody reads the twin's log while it runs. Closed when the twin stops.
     log = tempfile.TemporaryFile("w+")  # noqa: SIM115
     process = subprocess.Popen(
-        [sys.executable, "-m", "lerobot_contrast.twin", *flags], stdout=subprocess.PIPE, stderr=log, text=True
+        [sys.executable, "-m", "lerobot_contrast.twin", *flags],
+        stdout=subprocess.PIPE,
+        stderr=log,
+        text=True,
+        preexec_fn=_stop_with_parent(),
     )
     endpoints = {}
     for _ in ENDPOINTS:

@@ -237,3 +237,27 @@ def test_no_twin_answering_is_one_line():
     port = free_port()
     with pytest.raises(UserError, match=rf"^no twin answers on tcp://127.0.0.1:{port} within 0.2 s; start it with"):
         request({"cmd": "scene"}, port, timeout_s=0.2)
+
+
+def test_a_twin_stops_when_the_process_that_started_it_is_killed():
+    """A benchmark or test killed with SIGKILL runs no clean-up: its twin must not live on, holding ports and a core."""
+    starter = (
+        "from lerobot_contrast.twin.launch import running_twin\n"
+        "print(running_twin().__enter__().process.pid, flush=True)\ninput()"
+    )
+    parent = subprocess.Popen([sys.executable, "-c", starter], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    twin = int(parent.stdout.readline())
+    parent.kill()
+    parent.wait()
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and _alive(twin):
+        time.sleep(0.2)
+    assert not _alive(twin)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().split(")")[-1].split()[0] != "Z"  # a zombie has exited
+    except FileNotFoundError:
+        return False
