@@ -53,6 +53,7 @@ class ArmOperator:
         self.after: seeing.View | None = None
         self.held_at_end: tuple[str, ...] = ()  # what the jaws held when the last episode ended
         self.landings: list[tuple[tuple[float, float], tuple[float, float]]] = []  # (aimed at, seen landing)
+        self.attempts: list[dict[str, Any]] = []  # this trial's picks: each object, where from, aimed at, seen after
         self.calls = 0  # a person called to the bench, all session
         self._trial_calls = 0  # ... while staging this trial
         self._before, self._started, self._person_s = Spent(), 0.0, 0.0
@@ -64,6 +65,7 @@ class ArmOperator:
         self.person.announce(context)
         self._before = self.memory.recall(context.index)  # a run killed mid-staging resumes with what it spent
         self._started, self._person_s, self._person_clock_s, self._trial_calls = robot_clock().now(), 0.0, 0.0, 0
+        self.attempts = []
         try:
             self._staging = True
             with _link("staging"):
@@ -206,6 +208,9 @@ class ArmOperator:
             self.motion.follow(steps)
             self._checkpoint()
             landed = self._look().seen.get(name)
+            self.attempts.append({"object": name, "from": _rounded(seen.x, seen.y), "aim": _rounded(*aim),
+                                  "landed": None if landed is None else _rounded(landed.x, landed.y),
+                                  "held": landed is not None and landed.held})  # fmt: skip
             if landed is None or landed.held:
                 dropped[name] = dropped.get(name, 0) + 1
                 if dropped[name] >= 2:
@@ -280,6 +285,7 @@ class ArmOperator:
             "placed": {name: [round(p.x, 4), round(p.y, 4)] for name, p in placed.objects.items()},
             "unseen": list(view.unseen),
             "rounds": rounds,
+            "attempts": self.attempts,
             "robot_s": round(total.robot_s, 2),
             "person_calls": total.calls,
         }
@@ -303,6 +309,11 @@ def _link(doing: str) -> Iterator[None]:
         yield
     except OSError as error:
         raise ArmLost(f"the arm stopped answering while {doing} ({' '.join(str(error).split())}); check it") from None
+
+
+def _rounded(x: float, y: float) -> list[float]:
+    """(x, y) in metres, rounded to the millimetre, for the journal."""
+    return [round(x, 3), round(y, 3)]
 
 
 def _inside(pose: Pose, bounds) -> bool:

@@ -82,6 +82,9 @@ def test_the_arm_brings_the_spare_in_from_the_tray_and_takes_it_back_with_no_per
         assert operator.stage(trial(0, with_spare, without)).action == "ready"
         brought = placement.poses()["yellow_cube"]
         assert np.hypot(brought[0] - 0.36, brought[1] + 0.07) < 0.02  # on its target, from the tray
+        picked = operator.attempts[0]  # what the journal's staging record says the arm did
+        assert picked["object"] == "yellow_cube" and tray.contains(*picked["from"]) and not picked["held"]
+        assert np.hypot(picked["landed"][0] - brought[0], picked["landed"][1] - brought[1]) < 0.01
         assert operator.stage(trial(1, without, with_spare)).action == "ready"
         back = placement.poses()["yellow_cube"]
         assert tray.contains(back[0], back[1]) and back[2] < 0.03  # put down in the tray
