@@ -2,10 +2,11 @@
 clock their results must not depend on the machine's load (the few real-time tests, `-m realtime`, are left out:
 they check what only an unloaded machine shows).
 
-    .venv/bin/python scripts/bench/bench_tests_under_load.py [--runs=5] [--hogs=2] [--workers=2] [PATHS...]
+    .venv/bin/python scripts/bench/bench_tests_under_load.py [--runs=2] [--hogs=1] [--workers=2] [PATHS...]
 
 Each run is `pytest -n WORKERS -m "not realtime" PATHS` (default: tests/twin tests/operators) beside HOGS busy
-processes; the last line: runs=... failed_runs=... failed_tests=... tests=... mean_run_s=... hogs=...
+processes (a run took 5-7 minutes on this project's 2-core machine; `--runs=5`, as the twin's clock was checked with,
+about 32); the last line: runs=... failed_runs=... failed_tests=... tests=... mean_run_s=... hogs=...
 """
 
 from __future__ import annotations
@@ -28,8 +29,8 @@ def hog() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = ScriptParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--hogs", type=int, default=2, help="busy processes beside every run")
+    parser.add_argument("--runs", type=int, default=2)
+    parser.add_argument("--hogs", type=int, default=1, help="busy processes beside every run")
     parser.add_argument("--workers", type=int, default=2, help="pytest-xdist workers")
     parser.add_argument("paths", nargs="*", default=PATHS)
     args = parser.parse_args(argv)
