@@ -21,6 +21,7 @@ from lerobot_contrast.so101.scene import build_spec, is_bin, object_sizes
 
 NEAR_GAP = 0.012  # m between the faces of an object put next to another: room for where it lands, within the goal
 BIN_INSETS = (0.0, 0.015, 0.03)  # m towards the arm from a bin's middle, tried in turn when the middle is unreachable
+BIN_SIDESTEP = 0.03  # m from a bin's middle: the spots around it, for a bin that already holds an object
 
 
 def _plain(text: str) -> str:
@@ -53,20 +54,19 @@ def arm_model(spec: TaskSpec) -> mujoco.MjModel:
 
 
 def targets(predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec) -> list[tuple[float, float]]:
-    """Where to put the subject down, best first: a bin's middle (then nearer the arm), or beside the base object
+    """Where to put the subject down, best first: in a bin, clear of what it already holds, or beside the base object
     across one of its faces, clear of the other objects and of the bins' walls and on the workspace (a base at its
     edge is not put beside on the far side, where no camera checks the table), nearest the subject first."""
     regions = spec.workspace.regions
+    subject = predicate["subject"]
+    others = [(x, y) for name, (x, y, _, _) in poses.items() if name not in (subject, predicate.get("near"))]
     if "in" in predicate:
-        cx, cy = regions[predicate["in"]].middle
-        reach_out = math.hypot(cx, cy)
-        return [(cx * (1 - inset / reach_out), cy * (1 - inset / reach_out)) for inset in BIN_INSETS]
-    subject, base = predicate["subject"], predicate["near"]
+        return _in_bin(regions[predicate["in"]], others, spec.workspace.min_spacing)
+    base = predicate["near"]
     sizes = object_sizes(spec)
     bx, by, _, byaw = poses[base]
     distance = (sizes[subject] + sizes[base]) / 2 + NEAR_GAP
     spots = [(bx + distance * math.cos(h), by + distance * math.sin(h)) for h in reach.headings(byaw)]
-    others = [(x, y) for name, (x, y, _, _) in poses.items() if name not in (subject, base)]
     walls = [(r.center, r.radius + sizes[subject]) for r in regions.values() if is_bin(r)]
     (x0, x1), (y0, y1) = spec.workspace.area.box
     half = sizes[subject] / 2
@@ -80,6 +80,25 @@ def targets(predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec) -> l
     ]
     sx, sy = poses[subject][:2]
     return sorted(clear, key=lambda s: math.dist(s, (sx, sy)))
+
+
+def _in_bin(region, others: list[tuple[float, float]], spacing: float) -> list[tuple[float, float]]:
+    """Spots in a bin, best first: its middle, then nearer the arm (where the middle is out of reach), then around
+    the middle; those `spacing` clear of every other object before the rest (a cube dropped against one already in
+    the bin jams both against its wall, where the jaws cannot take either out), the most clear first."""
+    cx, cy = region.middle
+    reach_out = math.hypot(cx, cy)
+    spots = [(cx * (1 - inset / reach_out), cy * (1 - inset / reach_out)) for inset in BIN_INSETS]
+    spots += [
+        (cx + BIN_SIDESTEP * math.cos(a), cy + BIN_SIDESTEP * math.sin(a))
+        for a in np.linspace(0, 2 * math.pi, 8, endpoint=False)
+    ]
+
+    def room(spot: tuple[float, float]) -> float:
+        return min((math.dist(spot, other) for other in others), default=math.inf)
+
+    clear = [spot for spot in spots if room(spot) >= spacing]
+    return clear + sorted((spot for spot in spots if room(spot) < spacing), key=room, reverse=True)
 
 
 def ik_seeds(x: float, y: float) -> list[dict[str, float]]:

@@ -87,6 +87,20 @@ def test_next_to_targets_lie_beside_the_base_within_the_goal(task):
     assert len(spots) == 3 and all(spot[0] <= x_max - 0.015 for spot in spots)
 
 
+def test_a_cube_goes_into_a_bin_clear_of_the_one_already_there(task):
+    goal = plan.goal_of(task, "put the red cube in the right bin")
+    bin_ = task.spec.workspace.regions["right_bin"]
+    poses = {"red_cube": (0.3, 0.05, 0.015, 0.0), "green_cube": (0.36, 0.1, 0.015, 0.0),
+             "blue_cube": (*bin_.middle, 0.015, 0.0)}  # fmt: skip
+    spot = plan.targets(goal, poses, task.spec)[0]
+    assert bin_.contains(*spot) and math.dist(spot, bin_.middle) >= 0.03  # beside the blue cube, not onto it
+    poses["blue_cube"] = (bin_.middle[0] + 0.03, bin_.middle[1], 0.015, 0.0)  # at one side: the other side
+    spot = plan.targets(goal, poses, task.spec)[0]
+    assert bin_.contains(*spot) and math.dist(spot, poses["blue_cube"][:2]) > task.spec.workspace.min_spacing - 1e-9
+    poses["blue_cube"] = (0.3, -0.05, 0.015, 0.0)  # an empty bin: its middle
+    assert plan.targets(goal, poses, task.spec)[0] == pytest.approx(bin_.middle)
+
+
 def where(server, names) -> list[float]:
     """The objects' x, y on the twin, in the order of `names`."""
     objects = server.answer(b'{"cmd": "scene"}')["objects"]
