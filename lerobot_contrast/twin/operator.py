@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +29,13 @@ from lerobot_contrast.twin.placement_client import DEFAULT_ADDRESS, PlacementCli
 SETTLE_S = 0.5
 STRAY_M = 0.01  # an object this far from where the trial starts it was moved: put it back
 LIFTED_M = 0.02  # an object this far above where it rested when staged is held, not put down
+
+
+def held(heights: Mapping[str, float], resting: Mapping[str, float], gripped: Collection[str]) -> dict[str, float]:
+    """The objects held in the gripper, each with how far (m) above where it rested when staged: lifted off its rest
+    and touching the jaws (one lying on another object is lifted, not held)."""
+    return {name: z - resting[name] for name, z in heights.items()
+            if name in resting and name in gripped and z - resting[name] > LIFTED_M}  # fmt: skip
 
 
 class OperatorError(Exception):
@@ -136,7 +143,7 @@ class Operator:
         before = self.placement.scene()
         strays = self._strays(before)
         self._place({**self.moves, **strays})
-        after, self.resting = self.placement.look()
+        after, self.resting, _ = self.placement.look()
         moved = {name: pose.distance_to(after.objects[name]) for name, pose in before.objects.items()}
         each = ", ".join(f"{name} {distance:.3f}" for name, distance in moved.items() if distance > 0.001)
         self.said.append(f"moved {sum(moved.values()):.3f} m (the twin's truth: {each})")
@@ -146,9 +153,8 @@ class Operator:
         return ""
 
     def _label(self) -> str:
-        scene, heights = self.placement.look()
-        lifted = {name: z - self.resting[name] for name, z in heights.items()
-                  if name in self.resting and z - self.resting[name] > LIFTED_M}  # fmt: skip
+        scene, heights, gripped = self.placement.look()
+        lifted = held(heights, self.resting, gripped)
         where = ", ".join(f"{name} ({pose.x:.3f}, {pose.y:.3f})" for name, pose in scene.objects.items())
         self.said.append(f"{ENDED}{where}")
         for name, up in lifted.items():

@@ -20,6 +20,7 @@ CONTROL_DT = 0.01  # s per tick: the bank and the actuators' targets update at 1
 # running it in bursts.
 MAX_LAG = 0.1
 PLACE_CLEARANCE = 0.0005  # m above the table a placed object starts, so it settles without a jump
+JAW_PADS = ("fixed_jaw_pad", "moving_jaw_pad")  # the gripper's pad geoms, as the arm's model names them
 T = TypeVar("T")
 
 
@@ -110,6 +111,17 @@ class Physics:
         """Each object's true pose: x, y, z (its centre, metres, task frame) and yaw (radians, in (-pi, pi])."""
         with self.lock:
             return {name: _pose(self.data.body(name)) for name in self.objects}
+
+    def gripped(self) -> set[str]:
+        """The objects touching the gripper's jaws (the bodies that carry its pads)."""
+        with self.lock:
+            jaws = {int(self.model.geom(pad).bodyid[0]) for pad in JAW_PADS}
+            touching = set()
+            for contact in self.data.contact[: self.data.ncon]:
+                bodies = {int(self.model.geom_bodyid[contact.geom1]), int(self.model.geom_bodyid[contact.geom2])}
+                if bodies & jaws:
+                    touching |= bodies - jaws
+            return {name for name in self.objects if self.model.body(name).id in touching}
 
     def place(self, name: str, x: float, y: float, yaw: float) -> None:
         """Put object `name` upright on the table at (x, y) turned by yaw, at rest."""

@@ -4,8 +4,9 @@ forward, y to the arm's left; every reply has "ok", and "error" with one line wh
 
   {"cmd": "place", "object": NAME, "x": m, "y": m, "yaw": rad}  put an object down there, at rest (yaw optional)
                                         -> {"moved_aside": [NAME]}: objects in the way, put back where they wait
-  {"cmd": "scene"}                       -> {"objects": {NAME: [x, y, yaw]}, "z": {NAME: z}, "time": s}: the true
-                                           poses, and the simulated time (it lags the wall clock on a busy machine)
+  {"cmd": "scene"}                       -> {"objects": {NAME: [x, y, yaw]}, "z": {NAME: z}, "gripped": [NAME],
+                                           "time": s}: the true poses, the objects touching the gripper's jaws, and
+                                           the simulated time (it lags the wall clock on a busy machine)
   {"cmd": "board", "x": m, "y": m, "yaw_deg": deg}  lay the printed calibration board on the table
   {"cmd": "remove_board"}               -> {"removed": bool}
   {"cmd": "reset_arm"}                  put the arm at rest at once
@@ -45,6 +46,7 @@ class PlacementServer(ReplyServer):
             return {
                 "objects": {name: [x, y, yaw] for name, (x, y, _, yaw) in poses.items()},
                 "z": {name: z for name, (_, _, z, _) in poses.items()},
+                "gripped": sorted(self.physics.gripped()),
                 "time": self.physics.read(lambda model, data: float(data.time)),
             }
         if command == "place":

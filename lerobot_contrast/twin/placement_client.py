@@ -45,10 +45,12 @@ class PlacementClient:
     def scene(self) -> Scene:
         return self.look()[0]
 
-    def look(self) -> tuple[Scene, dict[str, float]]:
-        """The true scene, and each object's height (m): what tells an object resting from one held in the gripper."""
+    def look(self) -> tuple[Scene, dict[str, float], frozenset[str]]:
+        """The true scene, each object's height (m) and the objects touching the gripper's jaws: what tells an object
+        resting (on the table, or on another object) from one held in the gripper."""
         reply = self.ask({"cmd": "scene"})
-        return Scene({name: Pose(*pose) for name, pose in reply["objects"].items()}), reply["z"]
+        scene = Scene({name: Pose(*pose) for name, pose in reply["objects"].items()})
+        return scene, reply["z"], frozenset(reply["gripped"])
 
     def time(self) -> float:
         """The twin's simulated time (s): real time on the wall clock (lagging it on a busy machine), the time its

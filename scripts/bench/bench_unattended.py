@@ -40,7 +40,7 @@ from lerobot_contrast.so101 import DEFAULT_PACE, PICK_AND_PLACE_S
 from lerobot_contrast.spine.flags import ScriptParser
 from lerobot_contrast.twin.console_session import run_answered
 from lerobot_contrast.twin.launch import running_twin
-from lerobot_contrast.twin.operator import LIFTED_M, Operator, OperatorError, PlacementError, Plan
+from lerobot_contrast.twin.operator import Operator, OperatorError, PlacementError, Plan, held
 from lerobot_contrast.twin.placement_client import PlacementClient
 from lerobot_contrast.twin.table_calibration import calibrate_table
 
@@ -91,9 +91,8 @@ class Judge(Operator):
         if kind == "running":
             self._placed()
         if kind == "ended" or (kind == "label" and self._ended != self.index):  # a person labels the scene as left
-            scene, heights = self.placement.look()
-            lifted = {name for name, z in heights.items() if z - self.resting.get(name, z) > LIFTED_M}
-            self.truth_at_end, self._ended = (scene, lifted), self.index
+            scene, heights, gripped = self.placement.look()
+            self.truth_at_end, self._ended = (scene, set(held(heights, self.resting, gripped))), self.index
         if kind == "labelled" or (kind == "label" and self._labelled != self.index):  # the arm's label, or a person's
             truth = self.plan.judge(self.instance, *self.truth_at_end)
             now = self.placement.time()
@@ -103,7 +102,7 @@ class Judge(Operator):
         return answer
 
     def _placed(self) -> None:
-        truth, self.resting = self.placement.look()  # heights as staged: a cube lifted later is held
+        truth, self.resting, _ = self.placement.look()  # heights as staged: a cube lifted later is held
         workspace = self.plan.task.spec.workspace.area
         for name, target in self.instance.scene.objects.items():
             if name in truth.objects and workspace.contains(target.x, target.y):

@@ -122,6 +122,7 @@ class FakePlacement:
     def __init__(self, scene: Scene):
         self.placed, self.reported = {}, scene
         self.z = dict.fromkeys(scene.objects, 0.0125)  # resting on the table
+        self.gripped: set[str] = set()  # touching the jaws
 
     def place(self, name: str, x: float, y: float) -> None:
         self.placed[name] = (x, y)
@@ -129,8 +130,8 @@ class FakePlacement:
     def scene(self) -> Scene:
         return self.reported
 
-    def look(self) -> tuple[Scene, dict[str, float]]:
-        return self.scene(), dict(self.z)
+    def look(self) -> tuple[Scene, dict[str, float], frozenset[str]]:
+        return self.scene(), dict(self.z), frozenset(self.gripped)
 
 
 def planned_trials() -> dict[int, Instance]:
@@ -203,12 +204,15 @@ def test_a_cube_still_held_over_its_goal_when_the_episode_ends_is_a_failure():
     assert typed == ["", "a"]  # staged, and what the camera flagged accepted
     green = start["green_cube"]  # the goal holds by x and y: the red cube hangs right beside the green one
     placement.reported = Scene({**start, "red_cube": Pose(green.x + 0.04, green.y)})
-    placement.z["red_cube"] += 0.06  # ... in the gripper, 6 cm up
+    placement.z["red_cube"] += 0.06  # ... 6 cm up, on top of something: not held, it lies there
+    assert scripted.handle(LABEL) == "y"
+    placement.gripped.add("red_cube")  # ... in the gripper
     assert scripted.handle(LABEL) == "n"
     assert scripted.said[-1] == "red_cube is held 6.0 cm up, not put down"
     ended = next(line for line in scripted.said if line.startswith("the trial ended with "))
     assert f"red_cube ({green.x + 0.04:.3f}, {green.y:.3f})" in ended  # where each object is, for the study's log
     placement.z["red_cube"] -= 0.06  # let go: now it rests there
+    placement.gripped.clear()
     assert scripted.handle(LABEL) == "y"
 
 

@@ -9,6 +9,7 @@ from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.task_file import load_task_file
 from lerobot_contrast.so101 import arm, reach
 from lerobot_contrast.so101.scene import build_spec
+from lerobot_contrast.twin.operator import held
 from lerobot_contrast.twin.physics import Physics
 from lerobot_contrast.twin.servos import ServoBank
 
@@ -61,6 +62,20 @@ def test_waypoints_grip_across_the_faces_and_lift_clear(blocks):
     assert steps["close"].goals[arm.GRIPPER] < reach.jaw_angle(physics.model, 0.03) < steps["open"].goals[arm.GRIPPER]
     reach.follow(physics, plan[:4])
     assert physics.poses()["red_cube"][2] > 0.06  # held up in the air by the jaws
+    assert physics.gripped() == {"red_cube"}  # the truth the judge reads: in the jaws
+
+
+def test_a_cube_lying_on_another_is_lifted_but_not_held(blocks):
+    """The judge's truth: lifted off its rest is not enough for held, it must touch the jaws (a cube the policy dropped
+    onto another in a bin was counted held, and the camera's right label a mistake)."""
+    physics = bench(blocks, Pose(0.30, 0.0))
+    green = physics.model.joint("green_cube").qposadr[0]
+    physics.data.qpos[green : green + 3] = [0.30, 0.0, 0.047]  # on top of the red cube
+    physics.run(0.5)
+    x, y, z, _ = physics.poses()["green_cube"]
+    assert math.dist((x, y), (0.30, 0.0)) < 0.01 and z > 0.04  # resting on it, 3 cm up
+    assert physics.gripped() == set()
+    assert held({"green_cube": z, "red_cube": 0.015}, {"green_cube": 0.015, "red_cube": 0.015}, set()) == {}
 
 
 def test_a_target_beyond_reach_is_refused_not_attempted(blocks):
