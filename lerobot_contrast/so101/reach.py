@@ -137,6 +137,17 @@ def solve(
     return _checked(q, position_error, rotation, closing, target)
 
 
+def _solve_near(
+    model: mujoco.MjModel, point: np.ndarray, target: np.ndarray, across: float | None, seed: Mapping[str, float]
+) -> dict[str, float]:
+    """`solve` from `seed` (the pose before, so the arm moves least), else from rest turned towards the target: from a
+    pose folded near the base a far target's search can stick against a joint limit a millimetre or two short."""
+    try:
+        return solve(model, point, target, across, seed)
+    except Unreachable:
+        return solve(model, point, target, across, {**arm.REST, "shoulder_pan": math.atan2(target[1], target[0])})
+
+
 def _pinv(jacobian: np.ndarray, damping: float) -> np.ndarray:
     """Damped pseudo-inverse: bounded steps near singular poses."""
     return jacobian.T @ np.linalg.inv(jacobian @ jacobian.T + damping**2 * np.eye(len(jacobian)))
@@ -239,12 +250,12 @@ def pick_and_place(
     at_grasp, hover, across = _best(model, clear, grip, above, yaw, start, avoid)
     carry_at = np.array([target[0], target[1], CARRY_HEIGHT])
     release = np.array([target[0], target[1], size / 2 + RELEASE_DROP])
-    lift = solve(model, point, np.array([x, y, CARRY_HEIGHT]), None, hover)
+    lift = _solve_near(model, point, np.array([x, y, CARRY_HEIGHT]), None, hover)
     # Once held, the object turns with the jaws: where they point across no longer matters.
-    carried = solve(model, point, carry_at, None, lift)
-    lowered = solve(model, point, release, None, carried)
-    cleared = solve(model, clear, release, None, lowered)  # the fixed pad off the object's face before rising
-    withdrawn = solve(model, clear, carry_at, None, cleared)
+    carried = _solve_near(model, point, carry_at, None, lift)
+    lowered = _solve_near(model, point, release, None, carried)
+    cleared = _solve_near(model, clear, release, None, lowered)  # the fixed pad off the object's face before rising
+    withdrawn = _solve_near(model, clear, carry_at, None, cleared)
     return [
         Waypoint("open", {**hover, arm.GRIPPER: opened}, STEPS["open"]),
         Waypoint("descend", {**at_grasp, arm.GRIPPER: opened}, STEPS["descend"]),
