@@ -15,6 +15,7 @@ import numpy as np
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains.task_file import FileTask, TaskSpec
 from lerobot_contrast.domains.task_file.goals import compose
+from lerobot_contrast.domains.task_file.schema import Region
 from lerobot_contrast.domains.task_file.world import sample_scene
 from lerobot_contrast.so101 import arm, reach
 from lerobot_contrast.so101.scene import build_spec, is_bin, object_sizes
@@ -82,7 +83,7 @@ def targets(predicate: Mapping, poses: Mapping[str, tuple], spec: TaskSpec) -> l
     return sorted(clear, key=lambda s: math.dist(s, (sx, sy)))
 
 
-def _in_bin(region, others: list[tuple[float, float]], spacing: float) -> list[tuple[float, float]]:
+def _in_bin(region: Region, others: list[tuple[float, float]], spacing: float) -> list[tuple[float, float]]:
     """Spots in a bin, best first: its middle, then nearer the arm (where the middle is out of reach), then around
     the middle; those `spacing` clear of every other object before the rest (a cube dropped against one already in
     the bin jams both against its wall, where the jaws cannot take either out), the most clear first."""

@@ -127,9 +127,8 @@ def solve(
                 rows.append(weight * (np.eye(3) - np.outer(a, a)) @ jacr[:, dofs])
         step = _within_limits(q, ranges, jacp[:, dofs], position_error, np.vstack(rows), np.concatenate(errors))
         moved = np.clip(q + step, ranges[:, 0], ranges[:, 1])
-        if (
-            np.abs(moved - back).max() < SWING
-        ):  # swinging between two poses for good: keep this one, whose error is known
+        # Swinging between two poses for good: keep this one, whose error is the one checked.
+        if np.abs(moved - back).max() < SWING:
             break
         back, q = q, moved
         if np.linalg.norm(step) < 1e-7:
