@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.extras import require_extra
 from lerobot_contrast.spine.flags import parse_config, usage_text, wants_help
+from lerobot_contrast.twin.launch import stop_with_parent
 from lerobot_contrast.twin.process import TwinConfig
 
 USAGE = "python -m lerobot_contrast.twin [--flag=value | --flag value] ..."
@@ -23,6 +24,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if wants_help(argv):
         print(usage_text(TwinConfig, USAGE))
         return 0
+    stop_with_parent()
     stopping = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):  # set first: a Ctrl-C while starting still stops cleanly
         signal.signal(signum, lambda *_: stopping.set())

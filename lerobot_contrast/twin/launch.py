@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import os
 import signal
 import subprocess
 import sys
@@ -18,16 +19,20 @@ from lerobot_contrast.ports import free_port
 
 ENDPOINTS = ("bus", "camera", "placement", "calibration", "clock", "eval flags")
 PR_SET_PDEATHSIG = 1  # Linux's prctl option: a signal for this process when its parent dies
+PARENT = "LEROBOT_CONTRAST_TWIN_PARENT"  # the environment variable naming the process that started the twin
 
 
-def _stop_with_parent() -> typing.Callable[[], None] | None:
-    """What the twin's process runs before it starts, on Linux: ask for a SIGTERM when the process that started it
-    dies, even killed (a benchmark killed with -9 left its twin running, holding its ports and a core). The C
-    library is looked up here, in the parent: nothing but the call runs between fork and exec."""
-    if sys.platform != "linux":
-        return None
-    prctl = ctypes.CDLL(None, use_errno=True).prctl
-    return lambda: prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+def stop_with_parent() -> None:
+    """Called first in a twin that `start_twin` started (Linux): ask for a SIGTERM when the process that started it
+    dies, even killed (a benchmark killed with -9 left its twin running, holding its ports and a core); where that
+    process is already gone, stop now. Asked by the twin itself, not between fork and exec, where only
+    async-signal-safe calls belong."""
+    parent = os.environ.get(PARENT)
+    if parent is None or sys.platform != "linux":
+        return
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    if os.getppid() != int(parent):
+        raise SystemExit("the process that started the twin is gone")
 
 
 @dataclass
@@ -69,7 +74,7 @@ def start_twin(*flags: str) -> RunningTwin:
         stdout=subprocess.PIPE,
         stderr=log,
         text=True,
-        preexec_fn=_stop_with_parent(),
+        env={**os.environ, PARENT: str(os.getpid())},
     )
     endpoints = {}
     for _ in ENDPOINTS:
