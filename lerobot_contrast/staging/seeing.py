@@ -52,7 +52,7 @@ class View:
         for name, sighting in self.seen.items():
             if name in self.waiting and name not in believed.objects:
                 continue
-            elif not sighting.held:
+            if not sighting.held:
                 objects[name] = Pose(sighting.x, sighting.y, sighting.yaw or 0.0)
         return Scene(objects, believed.robot)
 

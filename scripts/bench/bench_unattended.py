@@ -1,10 +1,10 @@
 """Unattended sessions on the twin: the arm stages every trial and the camera labels it (`--operator=arm`), judged
 against the twin's truth. Starts its own twin (640x480, wide-angle lens), lays the printed board and calibrates the
 camera as a person would once, takes the board away, then runs a contrast set with the arm as operator; the scripted
-person answers only when the arm rings for one. With `--operator=console` the same bases run with no arm: the scripted
-person stages every trial and labels it, as the comparison. The twin's truth is read here, by the judge, never by the arm; the
-judge takes each trial's instance and targets from what the evaluator says it runs (the console's channel), and the
-truth of an outcome from the moment the episode ended, before the arm lets go.
+person answers only when the arm rings for one. With `--operator=console` the same bases run with no arm: the
+scripted person stages every trial and labels it, as the comparison. The twin's truth is read here, by the judge,
+never by the arm; the judge takes each trial's instance and targets from what the evaluator says it runs (the
+console's channel), and the truth of an outcome from the moment the episode ended, before the arm lets go.
 
     .venv/bin/python scripts/bench/bench_unattended.py [--bases=3] [--joint_offset_deg=D] [--task=so101_blocks]
         [--perturbations=L,SB] [--episode_s=S] [--seed=0] [--clock=sim|wall] [--operator=arm|console] [--work=DIR]
@@ -172,7 +172,7 @@ def figures(judge: Judge, run_dir: Path) -> dict[str, str]:
         "person_calls": str(sum(judge.person.values())),
         "staging_s_per_trial": f"{np.mean(staging):.1f}",
         "person_s_per_trial": f"{person_s / len(done):.1f}",
-        "trials_per_hour": f"{len(labels) / (hours):.1f}" if hours else "nan",
+        "trials_per_hour": f"{len(labels) / hours:.1f}" if hours else "nan",
         "trials": str(len(done)),
     }
 
