@@ -22,6 +22,7 @@ from lerobot_contrast.contrast.audited import audited
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
+from lerobot_contrast.operators import arm_joints
 from lerobot_contrast.operators.arm_args import ArmArgs
 from lerobot_contrast.operators.arm_memory import ArmMemory, Spent
 from lerobot_contrast.operators.base import Label, SessionStopped, Staging
@@ -47,6 +48,7 @@ class ArmOperator:
         self.seed = seed
         self.motion = ArmMotion(robot, plan.arm_model(task.spec), args.pace, self._stop_pressed, self._reached)
         self._staging = False  # while True, each waypoint reached keeps what staging has spent (a kill loses none)
+        self._joints_known = False  # the joints' offsets measured (or recalled) this session
         self.size = camera.geometry.size
         self.memory = memory
         self.context: TrialContext | None = None
@@ -63,6 +65,12 @@ class ArmOperator:
     def stage(self, context: TrialContext) -> Staging:
         self.context = context
         self.person.announce(context)
+        if self.args.measure_joints and not self._joints_known:
+            try:
+                self._measure_joints()
+            except Stopped as stop:
+                self.say(f"[bold red]{stop}[/]")
+                return Staging("stop")
         self._before = self.memory.recall(context.index)  # a run killed mid-staging resumes with what it spent
         self._started, self._person_s, self._person_clock_s, self._trial_calls = robot_clock().now(), 0.0, 0.0, 0
         self.attempts = []
@@ -82,6 +90,23 @@ class ArmOperator:
         measured = self._record(context, view, rounds, total)
         return Staging("ready", total.person_s, measured=measured, robot_s=total.robot_s,
                        interventions=total.calls)  # fmt: skip
+
+    def _measure_joints(self) -> None:
+        """Each joint's calibration offset: measured earlier in this run, else now, before the run's first staging
+        (its robot time is the session's, not a trial's)."""
+        run_dir = self.memory.run_dir()
+        fitted = arm_joints.recall(run_dir)
+        if fitted is None:
+            self.say("measuring the arm's joints: the jaws move through views of the workspace while the camera "
+                     "finds the ball on the fixed jaw")  # fmt: skip
+            with _link("measuring its joints"):
+                fitted = arm_joints.measure(self.motion, lambda: self.camera.frame(self.robot), self.camera.calibration)
+            arm_joints.keep(run_dir, fitted)
+        self.motion.offsets = dict(fitted.offsets)
+        self._joints_known = True
+        offsets = ", ".join(f"{name} {math.degrees(value):+.1f}" for name, value in fitted.offsets.items())
+        self.say(f"the arm's joints are off their model by (degrees): {offsets}; fitted to {fitted.views} views "
+                 f"within {fitted.error_px:.1f} px")  # fmt: skip
 
     def _checkpoint(self) -> Spent:
         """What staging this trial has spent so far, kept in the run directory."""

@@ -11,6 +11,10 @@ UNSURE = ("ask", "unlabelled")
 class ArmArgs:
     """The arm as its own operator (--operator=arm): it stages each trial and labels it with the calibrated camera."""
 
+    # Before the run's first trial, measure each joint's calibration offset with the camera: the jaws move through
+    # views of the workspace (about a minute) and the camera finds a 2 cm purple ball fixed on the fixed jaw's outer
+    # face (docs/unattended.md). false: trust LeRobot's calibration of the joints as it is.
+    measure_joints: bool = True
     # Rounds of pick-and-place the arm tries before it calls a person to place what is still off target.
     tries: int = 3
     # Each motion's time as a multiple of the planner's (larger: slower and surer).

@@ -34,6 +34,14 @@ def arm_operator(
             "--operator=arm needs a calibrated camera to see the table: run python -m lerobot_contrast.calibrate with "
             "your --task and --robot flags, or give --staging.calibration=PATH"
         )
+    from lerobot_contrast.so101 import marker
+
+    purple = [name for name, colour in bench.geometry.colours.items() if colour == marker.COLOUR]
+    if args.measure_joints and purple:
+        raise UserError(
+            f"--arm.measure_joints finds the {marker.COLOUR} ball on the arm's jaw, and {purple[0]} has its colour: "
+            "take it off the table while the joints are measured, or pass --arm.measure_joints=false"
+        )
     from lerobot_contrast.operators.arm import ArmOperator
     from lerobot_contrast.operators.arm_memory import ArmMemory
 

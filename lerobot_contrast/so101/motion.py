@@ -44,11 +44,15 @@ class ArmMotion:
         self.data = mujoco.MjData(model)
         self.moving_s = 0.0  # seconds spent moving, all told
         self.goal: dict[str, float] = {}  # the joint goals last sent (radians)
+        # Each joint's calibration offset (radians, so101/marker.py): its true angle is its reading plus this. Joint
+        # angles in and out of this class are true ones; the servos are read and commanded through the offsets.
+        self.offsets: dict[str, float] = {}
 
     def joints(self) -> dict[str, float]:
-        """The arm's joint angles (radians), read from its servos."""
+        """The arm's joint angles (radians): its servos' readings plus their offsets."""
         positions = self.robot.bus.sync_read("Present_Position", num_retry=READ_RETRIES)
-        return {name: arm.from_lerobot(name, float(positions[name])) for name in arm.MOTOR_NAMES}
+        return {name: arm.from_lerobot(name, float(positions[name])) + self.offsets.get(name, 0.0)
+                for name in arm.MOTOR_NAMES}  # fmt: skip
 
     def jaws(self, size: float, joints: Mapping[str, float] | None = None) -> tuple[float, float, float]:
         """Where an object `size` wide held between the pads would be (x, y, z, metres)."""
@@ -79,13 +83,11 @@ class ArmMotion:
         along = [a + share * (b - a) for a, b in zip(chain, chain[1:], strict=False)]
         return np.concatenate([np.array(parts).reshape(-1, 3), *along, chain[-1][None]])
 
-    def follow(self, waypoints: Sequence[reach.Waypoint], correction: Mapping[str, float] | None = None) -> None:
-        """Move through `waypoints`, each joint interpolated from where the last goal left it; `correction` (radians
-        per joint) is added to every goal, for an arm whose calibration is off its model."""
-        correction = correction or {}
+    def follow(self, waypoints: Sequence[reach.Waypoint]) -> None:
+        """Move through `waypoints`, each joint interpolated from where the last goal left it."""
         start = self.joints()
         for waypoint in waypoints:
-            goal = {name: waypoint.goals.get(name, start[name]) + correction.get(name, 0.0) for name in start}
+            goal = {name: waypoint.goals.get(name, start[name]) for name in start}
             self._glide(start, goal, waypoint.seconds * self.pace)
             self.reached()
             start = goal
@@ -101,7 +103,7 @@ class ArmMotion:
             tick = clock.now()
             share = 0.5 - 0.5 * math.cos(math.pi * step / steps)  # ease in and out: no jerk at either end
             angles = {name: start[name] + share * (goal[name] - start[name]) for name in goal}
-            self.robot.send_action(arm.lerobot_action(angles))
+            self.robot.send_action(arm.lerobot_action({n: a - self.offsets.get(n, 0.0) for n, a in angles.items()}))
             self.goal = angles
             clock.sleep(1.0 / STEP_HZ - (clock.now() - tick), watched=False)  # the camera looks once it settles
             self.moving_s += 1.0 / STEP_HZ

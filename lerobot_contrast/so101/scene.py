@@ -13,7 +13,7 @@ from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains.task_file.schema import ObjectSpec, Region, TaskSpec
 from lerobot_contrast.domains.task_file.world import storage_scene
-from lerobot_contrast.so101 import arm
+from lerobot_contrast.so101 import arm, marker
 
 TABLE_MARGIN = 0.15  # m of table around the workspace, the base and the storage row
 TABLE_THICKNESS = 0.04
@@ -121,6 +121,7 @@ def build_spec(task: TaskSpec, scene: Scene | None = None, extras: Iterable[Spec
     for name in JAW_PADS:  # the model ships the fingertip pads inert; they are what holds a cube
         pad = spec.geom(name)
         pad.contype, pad.conaffinity, pad.friction, pad.condim = 1, 1, PAD_FRICTION, 4
+    marker.add_ball(spec, (*COLOURS[marker.COLOUR], 1.0))
     _add_room(spec, task)
     for region in task.workspace.regions.values():
         if is_bin(region):

@@ -62,9 +62,12 @@ class CameraCalibration:
 
     def lift(self, xy: np.ndarray, height: float) -> np.ndarray:
         """Table points (N, 2) raised `height` metres -> pixels (N, 2)."""
+        return self.project(np.column_stack([np.asarray(xy, np.float64).reshape(-1, 2), np.full(len(xy), height)]))
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Points (N, 3) in the table's frame (x, y on it, z up from it, metres) -> pixels (N, 2)."""
         intrinsics, rotation, translation = self.pose()
-        points = np.column_stack([np.asarray(xy, np.float64).reshape(-1, 2), np.full(len(xy), height)])
-        camera = points @ rotation.T + translation
+        camera = np.asarray(points, np.float64).reshape(-1, 3) @ rotation.T + translation
         projected = camera @ intrinsics.T
         ideal = projected[:, :2] / projected[:, 2:]
         return ideal if self.lens is None else self.lens.distort(ideal)

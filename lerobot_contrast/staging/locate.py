@@ -113,3 +113,15 @@ def known_colour(value: str | None) -> str | None:
     """The hue band a task's colour word names (colour or color, any case), None where there is none."""
     word = (value or "").strip().lower()
     return word if word in HUES else None
+
+
+def blob_near(image: np.ndarray, colour: str, near: np.ndarray, within_px: float, min_pixels: float) -> np.ndarray | None:
+    """The centroid (col, row) of the blob of `colour` nearest pixel `near`, if it lies within `within_px` of it and
+    has at least `min_pixels`: where a marker of that colour is seen whole, where it is expected to be."""
+    count, _, stats, centroids = cv2.connectedComponentsWithStats(colour_mask(image, colour), connectivity=8)
+    blobs = [i for i in range(1, count) if stats[i, cv2.CC_STAT_AREA] >= MIN_PIXELS]  # specks are noise
+    if not blobs:
+        return None
+    best = min(blobs, key=lambda i: np.hypot(*(centroids[i] - near)))
+    whole = stats[best, cv2.CC_STAT_AREA] >= min_pixels
+    return centroids[best] if whole and np.hypot(*(centroids[best] - near)) <= within_px else None

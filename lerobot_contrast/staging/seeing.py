@@ -18,8 +18,8 @@ from lerobot_contrast.staging.homography import CameraCalibration
 
 HELD_PX = 40  # a blob of an object's colour this near the jaws' image is the object in them
 HELD_ABOVE = 1.5  # jaws higher than this many object sizes carry what they hold clear of the table
-TOP_SHARE = 0.5
-ARM_RADIUS_M = 0.035  # masked around each point of the arm's links: about the links' half width  # the brightest share of a cube's pixels is its top face, lit from above
+TOP_SHARE = 0.5  # the brightest share of a cube's pixels is its top face, lit from above
+ARM_RADIUS_M = 0.035  # masked around each point of the arm's links: about the links' half width
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,9 @@ from lerobot_contrast.twin.launch import RunningTwin
 CONNECT_TRIES = 3  # a loaded machine's pty bus may miss a status packet while connecting
 
 
-def connected_arm(twin: RunningTwin, table: Path, task_name: str) -> tuple[Any, Any]:
-    """(robot, ArmOperator) on `twin`, connected; the caller disconnects the robot."""
+def connected_arm(twin: RunningTwin, table: Path, task_name: str, args: Any = None) -> tuple[Any, Any]:
+    """(robot, ArmOperator) on `twin`, connected, with `args` (ArmArgs; default: the defaults); the caller
+    disconnects the robot."""
     from rich.console import Console
 
     from lerobot_contrast.clock.robot_clock import use_clock
@@ -46,4 +47,4 @@ def connected_arm(twin: RunningTwin, table: Path, task_name: str) -> tuple[Any, 
     task = load_task(task_name)
     camera = make_bench(cfg.staging, cfg.task, task, robot, "distance", lambda: None)
     person = OperatorConsole(Answers(io.StringIO("")), Console(file=io.StringIO()))  # nobody at the bench
-    return robot, ArmOperator(robot, task, camera, person, ArmArgs(), ArmMemory(lambda: None))
+    return robot, ArmOperator(robot, task, camera, person, args or ArmArgs(), ArmMemory(lambda: None))
