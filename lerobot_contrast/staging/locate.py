@@ -115,7 +115,9 @@ def known_colour(value: str | None) -> str | None:
     return word if word in HUES else None
 
 
-def blob_near(image: np.ndarray, colour: str, near: np.ndarray, within_px: float, min_pixels: float) -> np.ndarray | None:
+def blob_near(
+    image: np.ndarray, colour: str, near: np.ndarray, within_px: float, min_pixels: float
+) -> np.ndarray | None:
     """The centroid (col, row) of the blob of `colour` nearest pixel `near`, if it lies within `within_px` of it and
     has at least `min_pixels`: where a marker of that colour is seen whole, where it is expected to be."""
     count, _, stats, centroids = cv2.connectedComponentsWithStats(colour_mask(image, colour), connectivity=8)

@@ -18,14 +18,17 @@ from tests.operators.test_arm_on_twin import trial
 
 pytestmark = pytest.mark.slow
 
+
 @pytest.fixture(scope="module")
 def bench(tmp_path_factory):
     work = tmp_path_factory.mktemp("joints")
     with running_twin("--task=so101_blocks", "--clock=sim", "--joint_offset_deg=3") as twin:
         yield twin, calibrate_table(twin, "so101_blocks", work / "table.calibration.json")
 
+
 def said(operator) -> str:
     return operator.person.console.file.getvalue()
+
 
 def test_measured_joints_put_a_cube_on_its_target_and_a_resumed_run_recalls_them(bench, tmp_path):
     twin, table = bench
@@ -57,6 +60,7 @@ def test_measured_joints_put_a_cube_on_its_target_and_a_resumed_run_recalls_them
         assert np.hypot(red[0] - 0.25, red[1] + 0.08) < 0.01
     finally:
         robot.disconnect()
+
 
 def test_a_camera_that_never_shows_the_ball_stops_the_measurement_in_one_line(bench):
     twin, table = bench
