@@ -1,6 +1,7 @@
 """The report's section on the camera's labels: with an audit, prediction-powered estimates beside the camera's,
 the camera against the person, and its error; without one, that the rates take the camera as right."""
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -25,12 +26,13 @@ def records(audit_share: float) -> list[TrialRecord]:
     return out
 
 
-def run(name: str, audit_share: float, operator: str = "arm"):
-    return SimpleNamespace(name=name, results=frame(records(audit_share)), config={"operator": operator}, summary={})
+def run(name: str, audit_share: float, operator: str = "arm", path=None):
+    return SimpleNamespace(name=name, results=frame(records(audit_share)), config={"operator": operator}, summary={},
+                           path=path)  # fmt: skip
 
 
 def test_an_audited_run_gets_estimates_a_confusion_table_and_the_cameras_error():
-    lines = audit_section([run("audited", 0.3)])
+    lines = audit_section([run("audited", 0.3, path=Path("/nonexistent"))])
     assert lines[0] == "## Labels the camera gave"
     row = next(line for line in lines if line.startswith("| audited |"))
     cells = [cell.strip() for cell in row.strip("|").split("|")]
@@ -41,6 +43,26 @@ def test_an_audited_run_gets_estimates_a_confusion_table_and_the_cameras_error()
 
 
 def test_without_an_audit_the_report_says_the_rates_take_the_camera_as_right():
-    lines = audit_section([run("plain", 0.0)])
+    lines = audit_section([run("plain", 0.0, path=Path("/nonexistent"))])
     assert any("no trial was audited" in line and "take every label the camera gave as right" in line for line in lines)
     assert audit_section([run("console", 0.3, operator="console")]) == []
+
+
+def test_a_trial_journalled_with_the_cameras_label_before_a_kill_is_audited_later_from_audit_jsonl(tmp_path):
+    """--arm.audit_at=viewer: the camera's label is journalled at once and marked drawn; a session killed before
+    anyone labels it loses nothing, the report says what still waits, and a label given later in the viewer counts."""
+    from lerobot_contrast.record.audit_labels import append_label
+
+    drawn = [r for r in records(0.0) if r.index % 5 == 0]
+    for record in drawn:
+        record.extra["audit_drawn"] = True
+    later = run("later", 0.0, path=tmp_path)
+    later.results = frame([*(r for r in records(0.0) if r.index % 5), *drawn])
+    waiting = audit_section([later])
+    assert any(f"{len(drawn)} trial(s) drawn for the audit still wait" in line for line in waiting)
+    assert any("no trial was audited" in line for line in waiting)
+    for record in drawn:
+        append_label(tmp_path, record.index, bool(record.success), 3.0)
+    lines = audit_section([later])
+    row = next(line for line in lines if line.startswith("| later |"))
+    assert f"{len(drawn)} of 80" in row and not any("still wait" in line for line in lines)

@@ -147,11 +147,15 @@ class ArmOperator:
         label = self._label(subgoals)
         if label.action != "done" or not audited(self.seed, self.context.index, self.args.audit):
             return label
+        if self.args.audit_at == "viewer":
+            self.say("[bold]audit[/]: this trial was drawn for a person's label too; give it on the run viewer's "
+                     "audit page (python -m lerobot_contrast.view RUN_DIR)")  # fmt: skip
+            return replace(label, audit_drawn=True)
         self.say("[bold]audit[/]: this trial was drawn for a person's label too; label it as you see it")
         checked = self.person.label(subgoals, None, None)  # no suggestion: the person's own eyes
         if checked.action != "done":
             return checked  # redo, skip or stop, as the person says
-        return replace(label, audit=checked.success)
+        return replace(label, audit=checked.success, audit_drawn=True)
 
     def _label(self, subgoals: Sequence[str]) -> Label:
         """The camera's label, or a person's where the camera is unsure."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 UNSURE = ("ask", "unlabelled")
+AUDIT_AT = ("live", "viewer")
 
 
 @dataclass
@@ -28,3 +29,7 @@ class ArmArgs:
     # The share of trials a person labels too, drawn at random from the run's seed whatever the camera's confidence:
     # the audit that the report's prediction-powered estimates correct the camera's labels with (0: none).
     audit: float = 0.0
+    # When the person labels an audited trial: live (at the bench, as the trial ends; a session killed while it asks
+    # runs the trial again) or viewer (later, from the episode's video on the run viewer's audit page, beside a session
+    # still running; the camera's label is journalled at once, the person's kept in audit.jsonl).
+    audit_at: str = "live"

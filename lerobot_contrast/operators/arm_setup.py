@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.operators.arm_args import UNSURE, ArmArgs
+from lerobot_contrast.operators.arm_args import AUDIT_AT, UNSURE, ArmArgs
 
 
 def arm_operator(
@@ -20,6 +20,8 @@ def arm_operator(
         raise UserError(f"--arm.unsure: unknown {args.unsure!r}; choose from: {', '.join(UNSURE)}")
     if args.tries < 1 or args.pace <= 0 or args.uncertainty < 0:
         raise UserError("--arm.tries must be at least 1, --arm.pace above 0 and --arm.uncertainty at least 0")
+    if args.audit_at not in AUDIT_AT:
+        raise UserError(f"--arm.audit_at: unknown {args.audit_at!r}; choose from: {', '.join(AUDIT_AT)}")
     if not 0 <= args.audit <= 1:
         raise UserError(f"--arm.audit={args.audit:g}: give the share of trials a person labels too, from 0 to 1")
     if getattr(robot, "robot_type", None) != "so_follower":

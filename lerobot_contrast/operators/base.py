@@ -35,6 +35,7 @@ class Label:
     unlabelled: bool = False  # recorded without a label, for review later (an arm operator unsure of the outcome)
     asked: bool = False  # a person was called to give this label (an arm operator unsure of the outcome)
     audit: bool | None = None  # a person's own label of an audited trial, beside the camera's (an arm operator)
+    audit_drawn: bool = False  # the audit drew this trial: a person labels it, at the bench or later in the viewer
 
 
 class Operator(Protocol):

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from lerobot_contrast.contrast import audited
+from lerobot_contrast.record.audit_labels import read_labels
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.markdown import num, perturbation_name, table
 from lerobot_contrast.reporting.runs import Run
@@ -22,11 +23,15 @@ SEQUENTIAL = (
 
 
 def labelled(run: Run) -> pd.DataFrame:
-    """The run's done trials with `label` (0/1, the run's label), `audited` and `person` (the audit's label)."""
+    """The run's done trials with `label` (0/1, the run's label), `drawn` (for the audit), `audited` (labelled by a
+    person: at the bench, in the journal, or later in the viewer, in audit.jsonl) and `person` (that label)."""
     rows = stats.done(run.results).sort_values("index")
     extra = rows["extra"].map(lambda text: json.loads(text) if isinstance(text, str) and text else {})
-    person = extra.map(lambda e: e.get("audit"))
+    later = read_labels(run.path)
+    person = [e.get("audit", later.get(int(i), {}).get("success")) for e, i in zip(extra, rows["index"], strict=True)]
+    person = pd.Series(person, index=rows.index, dtype=object)
     return rows.assign(label=rows["success"].astype(float), audited=person.notna(),
+                       drawn=extra.map(lambda e: bool(e.get("audit_drawn")) or "audit" in e),
                        person=person.map(lambda said: np.nan if said is None else float(said)))  # fmt: skip
 
 
@@ -35,9 +40,13 @@ def audit_section(runs: list[Run]) -> list[str]:
     if not arm:
         return []
     lines = ["## Labels the camera gave", ""]
-    rows, changes, unaudited = [], [], []
+    rows, changes, unaudited, pending = [], [], [], []
     for run in arm:
         df = labelled(run)
+        waiting = int((df["drawn"] & ~df["audited"]).sum())
+        if waiting:
+            pending.append(f"{run.name}: {waiting} trial(s) drawn for the audit still wait for a person's label "
+                           "(python -m lerobot_contrast.view RUN, its audit page); until then they count as unaudited.")  # fmt: skip
         if not df["audited"].any():
             unaudited.append(run.name)
             continue
@@ -60,6 +69,7 @@ def audit_section(runs: list[Run]) -> list[str]:
     if changes:
         header = ["run", "perturbation", "bases", "change (camera's labels)", "change (audited, PPI++)"]
         lines += table(header, changes) + [""]
+    lines += [line for text in pending for line in (text, "")]
     for name in unaudited:
         lines += [f"{name}: no trial was audited (--arm.audit), so its rates take every label the camera gave as "
                   "right.", ""]  # fmt: skip

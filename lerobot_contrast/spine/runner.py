@@ -414,9 +414,10 @@ def _connected(device: Any) -> bool:
 
 
 def _label_notes(label: Label) -> dict[str, bool]:
-    """How a label came about, where not the usual way: a person asked by the arm, or none given yet; and a person's
-    own label of a trial the audit drew."""
-    notes = {key: True for key, said in (("label_asked", label.asked), ("unlabelled", label.unlabelled)) if said}
+    """How a label came about, where not the usual way: a person asked by the arm, or none given yet; whether the
+    audit drew the trial, and a person's own label of it where given at the bench."""
+    said = (("label_asked", label.asked), ("unlabelled", label.unlabelled), ("audit_drawn", label.audit_drawn))
+    notes = {key: True for key, flag in said if flag}
     return notes if label.audit is None else {**notes, "audit": label.audit}
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from lerobot_contrast.record.audit_labels import AUDIT_FILE, read_labels
 from lerobot_contrast.record.journal import read_journal
 from lerobot_contrast.reporting.analysis import primary_metric
 from lerobot_contrast.reporting.markdown import used_settings
@@ -17,7 +18,7 @@ from lerobot_contrast.view import numbers, trials
 from lerobot_contrast.view.episodes import Dataset
 
 # The files whose change means the page is out of date.
-WATCHED = ("journal.jsonl", "summary.json", "results.parquet", "config.json", "dataset/meta/info.json")
+WATCHED = ("journal.jsonl", "summary.json", "results.parquet", "config.json", "dataset/meta/info.json", AUDIT_FILE)
 
 
 @dataclass
@@ -56,6 +57,7 @@ def run_json(run_id: str, run: Run, metric: str) -> dict[str, Any]:
     journal = run.path / "journal.jsonl"
     records = read_journal(journal) if journal.is_file() else []
     dataset = Dataset(run.path)
+    later = read_labels(run.path)
     return {
         "id": run_id,
         "name": run.name,
@@ -66,7 +68,7 @@ def run_json(run_id: str, run: Run, metric: str) -> dict[str, Any]:
         "cost_unit": run.cost_unit,
         "video_base": f"videos/{run_id}/",  # where the page finds the dataset's video files
         "settings": {k: v for k, v in used_settings(run.config).items()},
-        "trials": [trials.trial_json(r) for r in records],
+        "trials": [trials.trial_json(r, later.get(r.index)) for r in records],
         "pairs": trials.pairs(records),
         "curves": trials.curves(run, metric),
         "videos_absent": dataset.absent_why(run.config),
@@ -123,6 +125,12 @@ class Pages:
                 self._inputs = load_inputs(self.specs)
                 self._doc = build(self._inputs, live=True)
             return self._doc
+
+    def run_dir(self, run_id: str) -> Path | None:
+        """The directory of the page's run `run_id` (r0, r1, ...), or None."""
+        with self._lock:
+            runs = {f"r{k}": run for k, run in enumerate(self._inputs.runs)}
+        return None if run_id not in runs else runs[run_id].path
 
     def dataset(self, run_id: str) -> Dataset | None:
         with self._lock:

@@ -1,10 +1,12 @@
 """The page on 127.0.0.1: the static files, the runs' document (rebuilt when a run's files change) and each
-episode's signals as scripts, and the dataset's videos with byte ranges (a browser seeks with them)."""
+episode's signals as scripts, the dataset's videos with byte ranges (a browser seeks with them), and the audit
+page's labels (audit_post.py)."""
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import json
 import re
 import shutil
 from http import HTTPStatus
@@ -13,6 +15,7 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.view.audit_post import MAX_BODY, Refused, check_sender, take_label
 from lerobot_contrast.view.payload import Pages
 from lerobot_contrast.view.static_files import STATIC, script
 
@@ -20,6 +23,7 @@ HOST = "127.0.0.1"
 EPISODE = re.compile(r"/data/episodes/(r\d+)/(\d+)\.js")
 VIDEO = re.compile(r"/videos/(r\d+)/(.+\.mp4)")
 RANGE = re.compile(r"bytes=(\d*)-(\d*)")
+AUDIT = re.compile(r"/audit/(r\d+)")
 
 
 class ViewServerError(UserError):
@@ -53,6 +57,33 @@ class Handler(SimpleHTTPRequestHandler):
             self.path = "/index.html" if path == "/" else path.removeprefix("/static")
             return super().do_GET()
         return self.send_error(HTTPStatus.NOT_FOUND)
+
+    def do_POST(self) -> None:
+        match = AUDIT.fullmatch(unquote(urlsplit(self.path).path))
+        if match is None:
+            return self.send_error(HTTPStatus.NOT_FOUND)
+        try:
+            check_sender(self.headers, self.server.server_address[1])
+            run_dir = self.pages.run_dir(match.group(1))
+            if run_dir is None:
+                raise Refused(HTTPStatus.NOT_FOUND, f"no run {match.group(1)} on this page")
+            length = int(self.headers.get("Content-Length") or 0)
+            if not 0 < length <= MAX_BODY:
+                raise Refused(HTTPStatus.BAD_REQUEST, f"a label is one short JSON object (at most {MAX_BODY} bytes)")
+            kept = take_label(run_dir, self.rfile.read(length))
+        except Refused as refused:
+            return self._json({"error": str(refused)}, refused.status)
+        except OSError as error:
+            return self._json({"error": f"cannot keep the label ({error.strerror})"}, HTTPStatus.INTERNAL_SERVER_ERROR)
+        return self._json({"kept": kept}, HTTPStatus.OK)
+
+    def _json(self, data: dict, status: HTTPStatus) -> None:
+        body = json.dumps(data).encode("utf-8")
+        self.send_response(status)
+        self.send_header("Content-Type", "application/json; charset=utf-8")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
 
     def _text(self, text: str, kind: str) -> None:
         body = text.encode("utf-8")

@@ -63,8 +63,10 @@ def _xy(pose) -> list[float] | None:
     return None if pose is None else [round(pose.x, 3), round(pose.y, 3)]
 
 
-def trial_json(record: TrialRecord) -> dict[str, Any]:
+def trial_json(record: TrialRecord, later: dict[str, Any] | None = None) -> dict[str, Any]:
+    """`later`: a person's audit label given in the viewer (audit.jsonl), where there is one."""
     instance = record.instance
+    audit = record.extra.get("audit", None if later is None else later["success"])
     return {
         "index": record.index,
         "base_id": record.base_id,
@@ -87,7 +89,9 @@ def trial_json(record: TrialRecord) -> dict[str, Any]:
         "scene": None if instance is None else scene_json(instance.scene),
         "staging_check": record.extra.get("staging"),
         "label_asked": bool(record.extra.get("label_asked")),  # a person labelled it where the arm's camera was unsure
-        "audit": record.extra.get("audit"),  # a person's label of a trial the audit drew (--arm.audit), else None
+        "audit": audit,  # a person's label of a trial the audit drew (--arm.audit), at the bench or later, else None
+        "audit_drawn": bool(record.extra.get("audit_drawn")) or "audit" in record.extra,
+        "audit_seconds": None if later is None else later.get("seconds"),
     }
 
 

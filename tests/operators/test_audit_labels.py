@@ -1,5 +1,5 @@
 """--arm.audit: the trials the audit draws are labelled by a person too, blind to the camera's label, and both labels
-reach the journal; the others never ask."""
+reach the journal (or, audited in the viewer, the camera's label at once, marked drawn); the others never ask."""
 
 from types import SimpleNamespace
 
@@ -38,7 +38,18 @@ def test_an_audited_trial_gets_the_persons_label_beside_the_cameras():
     label = arm(person, 0.2, index).label([], None, None)
     assert (label.success, label.audit) == (True, False)  # the camera's label stands; the person's beside it
     assert person.asked == [None]  # asked without the camera's verdict as a suggestion
-    assert _label_notes(label) == {"audit": False}
+    assert _label_notes(label) == {"audit": False, "audit_drawn": True}
+
+
+def test_with_the_audit_in_the_viewer_the_camera_label_is_journalled_at_once_and_marked_drawn():
+    index = next(i for i in range(100) if audited(11, i, 0.2))
+    person = Person(Label("done", success=False))
+    operator = arm(person, 0.2, index)
+    operator.args = ArmArgs(audit=0.2, audit_at="viewer")
+    label = operator.label([], None, None)
+    assert (label.success, label.audit, person.asked) == (True, None, [])  # nobody asked at the bench
+    assert _label_notes(label) == {"audit_drawn": True}
+    assert "audit page" in person.said[-1]
 
 
 def test_a_trial_not_drawn_never_asks_and_a_person_may_still_stop():

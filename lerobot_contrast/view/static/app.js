@@ -14,7 +14,7 @@ function viewData(doc) {
   document.getElementById("live").hidden = !doc.live;
   if (doc.live && !view.timer) view.timer = setInterval(refresh, 2000);
   if (!doc.live && view.timer) { clearInterval(view.timer); view.timer = null; }
-  if (first || !location.hash.startsWith("#/pair/")) route();  // an open pair keeps playing
+  if (first || !(location.hash.startsWith("#/pair/") || auditStillOpen())) route();  // an open pair keeps playing
 }
 
 function refresh() {
@@ -33,6 +33,7 @@ function route() {
   if (parts[0] === "p" && view.runs[parts[1]]) page = pairsPage(parts[1], parts[2] || "all");
   else if (parts[0] === "pair" && view.runs[parts[1]] && view.runs[parts[3]]) page = pairPage(parts[1], +parts[2], parts[3], +parts[4]);
   else if (parts[0] === "ab" && view.runs[parts[1]] && view.runs[parts[2]]) page = abPage(parts[1], parts[2]);
+  else if (parts[0] === "audit" && view.runs[parts[1]]) page = auditPage(parts[1]);
   else page = overview();
   main.replaceChildren(page);
   main.dataset.page = parts[0] || "overview";
@@ -99,6 +100,8 @@ function overview() {
   const page = el("div", { id: "overview" });
   page.append(el("h2", {}, "Runs"), ...doc.runs.map(settingsBlock));
   for (const run of doc.runs) {
+    const audit = auditLink(run);
+    if (audit) page.append(audit);
     if (run.videos_absent) page.append(el("p", { class: "absent" }, `${run.name}: ${run.videos_absent}.`));
     if (run.journal_absent) page.append(el("p", { class: "absent" }, `${run.name}: ${run.journal_absent}.`));
   }
