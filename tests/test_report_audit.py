@@ -66,3 +66,5 @@ def test_a_trial_journalled_with_the_cameras_label_before_a_kill_is_audited_late
     lines = audit_section([later])
     row = next(line for line in lines if line.startswith("| later |"))
     assert f"{len(drawn)} of 80" in row and not any("still wait" in line for line in lines)
+    assert any(f"took 3.0 s per audited trial on the viewer's audit page after its episode ended (median of "
+               f"{len(drawn)}" in line for line in lines)  # fmt: skip

@@ -40,12 +40,15 @@ def audit_section(runs: list[Run]) -> list[str]:
     if not arm:
         return []
     lines = ["## Labels the camera gave", ""]
-    rows, changes, unaudited, pending = [], [], [], []
+    rows, changes, unaudited, notes = [], [], [], []
     for run in arm:
         df = labelled(run)
+        pace = _viewer_pace(run)
+        if pace:
+            notes.append(pace)
         waiting = int((df["drawn"] & ~df["audited"]).sum())
         if waiting:
-            pending.append(f"{run.name}: {waiting} trial(s) drawn for the audit still wait for a person's label "
+            notes.append(f"{run.name}: {waiting} trial(s) drawn for the audit still wait for a person's label "
                            "(python -m lerobot_contrast.view RUN, its audit page); until then they count as unaudited.")  # fmt: skip
         if not df["audited"].any():
             unaudited.append(run.name)
@@ -69,13 +72,22 @@ def audit_section(runs: list[Run]) -> list[str]:
     if changes:
         header = ["run", "perturbation", "bases", "change (camera's labels)", "change (audited, PPI++)"]
         lines += table(header, changes) + [""]
-    lines += [line for text in pending for line in (text, "")]
+    lines += [line for text in notes for line in (text, "")]
     for name in unaudited:
         lines += [f"{name}: no trial was audited (--arm.audit), so its rates take every label the camera gave as "
                   "right.", ""]  # fmt: skip
     if any(run.summary.get("stopping") for run in arm):
         lines += [SEQUENTIAL, ""]
     return lines
+
+
+def _viewer_pace(run: Run) -> str | None:
+    """How long a person took per label on the viewer's audit page, from the episode's end to the key."""
+    seconds = [label["seconds"] for label in read_labels(run.path).values() if "seconds" in label]
+    if not seconds:
+        return None
+    return (f"{run.name}: a person took {np.median(seconds):.1f} s per audited trial on the viewer's audit page after "
+            f"its episode ended (median of {len(seconds)}; 90th percentile {np.quantile(seconds, 0.9):.1f} s).")  # fmt: skip
 
 
 def _changes(df: pd.DataFrame) -> list[list[str]]:
