@@ -67,6 +67,11 @@ def test_a_person_labels_the_drawn_trials_from_the_keyboard_while_the_session_ap
         driver.get(address + "#/audit/r0")
         appending = threading.Thread(target=session)
         appending.start()
+        listed = [
+            int(li.get_attribute("data-trial"))
+            for li in wait_for(driver, "#audit-todo").find_elements(By.TAG_NAME, "li")
+        ]
+        assert listed == drawn  # what is still to label
         for key in ("s", "f"):
             heading = wait_for(driver, "#audit h3[data-trial]")
             trial = int(heading.get_attribute("data-trial"))

@@ -49,6 +49,8 @@ function auditPage(runId) {
       el("button", { id: "audit-success", onclick: () => auditSend(runId, state, true, status) }, "success (s)"),
       el("button", { id: "audit-failure", onclick: () => auditSend(runId, state, false, status) }, "failure (f)"),
       el("button", { onclick: () => auditReplay(media, state) }, "replay (r)")));
+  page.append(el("h3", {}, "Still to label"), el("ul", { id: "audit-todo" }, todo.map((t) => el("li", { "data-trial": t.index },
+    `trial ${t.index}: ${t.base_id}, ${label(t.perturbation || "original")}${t === trial ? " (now)" : ""}`))));
   view.audit = { runId, state, media, status };
   episodeOf(runId, trial).then((episode) => auditShow(media, status, run, episode, state));
   return page;
