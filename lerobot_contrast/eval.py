@@ -95,7 +95,12 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
         with progress:
             results = run(dataclasses.replace(evaluation, progress=progress))
     except ENDED_EARLY as error:
+        why = " ".join(str(error).split()) or "interrupted"
+        finish(
+            evaluation.operator, f"the session stopped ({why}); continue with python -m lerobot_contrast.eval {resume}"
+        )
         return say_ended_early(error, resume, f"in {journal}", recorded=lambda: len(read_journal(journal)))
+    finish(evaluation.operator, f"the session ended: {len(results.records)} trials in {path}")
     from lerobot_contrast.reporting.run_table import results_table  # pandas and scipy, needed only now
 
     print(results_table(results.records, results.summary, unit))
@@ -114,6 +119,13 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     return 0
 
 
+def finish(operator, text: str) -> None:
+    """Tell the person's channels (their page, notifications) that the session ended or stopped."""
+    console = getattr(operator, "person", operator)  # the arm's console is the person it calls
+    if hasattr(console, "finish"):
+        console.finish(text)
+
+
 def main(argv: list[str] | None = None) -> int:
     try:
         argv = join_values(list(sys.argv[1:] if argv is None else argv), bool_flags(EvalConfig))
@@ -121,8 +133,9 @@ def main(argv: list[str] | None = None) -> int:
             check_names(argv, flag_names(EvalConfig), robots=False)
         check_robot_type(argv, register_robots())
         if wants_help(argv):
-            arm = "--operator=arm" in argv  # join_values made `--operator arm` one argument
-            print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv), arm))
+            # join_values made `--operator arm` one argument
+            operator = next((a.split("=", 1)[1] for a in argv if a.startswith("--operator=")), None)
+            print(help_text(EvalConfig, "python -m lerobot_contrast.eval", robot_type(argv), operator))
             return 0
         return plan_and_run(parse_config(EvalConfig, resume_args(argv)), robot_type(argv))
     except UserError as error:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import collections
 import threading
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import IO, Any
 
 from rich.console import Console
@@ -22,7 +22,6 @@ from lerobot_contrast.contrast.staging import staging_moves
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
 from lerobot_contrast.operators.base import Label, SessionStopped, Staging
-from lerobot_contrast.operators.channel import Channel
 
 # In-trial keys (a letter, then Enter): end the episode as a success or a failure, or stop the robot now.
 TRIAL_KEYS = {"s": "success", "f": "failure", "e": "estop"}
@@ -41,7 +40,18 @@ class Answers:
         self._lines: collections.deque[str] = collections.deque()
         self._closed = False
         self._ready = threading.Condition()
+        self.taken: list[Callable[[], None]] = []  # told each time an answer is taken (the person's page)
         threading.Thread(target=self._read, args=(stream,), daemon=True, name="operator-input").start()
+
+    def offer(self, line: str) -> bool:
+        """Queue an answer from elsewhere than the stream (the person's page), unless one is already waiting: the
+        first answer to a prompt counts, and a second would answer the prompt after it."""
+        with self._ready:
+            if self._lines:
+                return False
+            self._lines.append(line)
+            self._ready.notify_all()
+            return True
 
     def _read(self, stream: IO[str]) -> None:
         for line in iter(stream.readline, ""):
@@ -56,8 +66,11 @@ class Answers:
         """The next line if it is an in-trial key; other answers stay queued for the prompts after the trial."""
         with self._ready:
             if self._lines and self._lines[0].lower() in TRIAL_KEYS:
-                return TRIAL_KEYS[self._lines.popleft().lower()]
-        return None
+                key = TRIAL_KEYS[self._lines.popleft().lower()]
+            else:
+                return None
+        self._tell()
+        return key
 
     def next(self) -> str:
         """Block for the next answer; the end of the input stops the session."""
@@ -66,12 +79,19 @@ class Answers:
                 if self._closed:
                     raise SessionStopped("the operator's input ended")
                 self._ready.wait()
-            return self._lines.popleft()
+            line = self._lines.popleft()
+        self._tell()
+        return line
+
+    def _tell(self) -> None:
+        for told in self.taken:
+            told()
 
 
 class OperatorConsole:
     """The operator interface (base.Operator) answered by a person. `bench`: a calibrated camera that shows each
-    target and checks the staging (staging.check.Bench); `channel`: where each prompt is also written as JSON."""
+    target and checks the staging (staging.check.Bench); `channels`: where each prompt is also sent (a JSON file for a
+    program, the person's page, notifications); one that shows what the console says has `said_line`."""
 
     def __init__(
         self,
@@ -79,21 +99,31 @@ class OperatorConsole:
         console: Console | None = None,
         unit: str = "m",
         bench: Any = None,
-        channel: Channel | None = None,
+        channels: Sequence[Any] = (),
     ) -> None:
         self.answers = answers
         self.console = console or Console(highlight=False)
         self.unit = unit
         self.bench = bench
-        self.channel = channel
+        self.channels = list(channels)
         self._trial: dict[str, Any] = {}  # the trial being staged, as the channel names it
 
     def _send(self, **message: Any) -> None:
-        if self.channel is not None:
-            self.channel.send(**message)
+        for channel in self.channels:
+            channel.send(**message)
 
     def say(self, text: str) -> None:
         self.console.print(text)
+        for channel in self.channels:
+            if hasattr(channel, "said_line"):
+                channel.said_line(text)
+
+    def finish(self, text: str) -> None:
+        """The session ended or stopped (`text` says how): told on every channel, then the channels close."""
+        self._send(event="session", text=text)
+        for channel in self.channels:
+            if hasattr(channel, "close"):
+                channel.close()
 
     def note(self, event: str, **facts: Any) -> None:
         """Tell a program on the channel something that needs no answer (the arm's own label, for one)."""

@@ -13,6 +13,7 @@ from lerobot_contrast.contrast.task import Task
 from lerobot_contrast.operators.base import Operator
 from lerobot_contrast.operators.channel import Channel
 from lerobot_contrast.operators.console import Answers, OperatorConsole
+from lerobot_contrast.operators.person_args import PersonArgs
 from lerobot_contrast.policies import policy_entry
 from lerobot_contrast.record.observer import EpisodeObserver
 from lerobot_contrast.spine.config import ConfigError, EvalConfig
@@ -124,6 +125,12 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
         )
     if cfg.cost in ("robot_time", "interventions") and mode != "arm":
         raise ConfigError(f"--cost={cfg.cost} counts what the arm's own staging spends: it needs --operator=arm")
+    if mode == "auto" and (cfg.person.page or cfg.person.notify):
+        raise ConfigError(
+            "--person.page and --person.notify reach the person who stages: they need --operator=console or arm"
+        )
+    if not 0 <= cfg.person.port <= 65535:
+        raise ConfigError(f"--person.port must be from 0 to 65535, got {cfg.person.port}")
     if mode == "auto":
         if cfg.cost == "measured":
             raise ConfigError("--cost=measured needs --operator=console: it is what a camera measured of the staging")
@@ -133,13 +140,39 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
     # The run directory is chosen after the console is built; the bench reads it when it first keeps a measurement.
     run_dir = lambda: cfg.output_dir  # noqa: E731
     bench = make_bench(cfg.staging, cfg.task, task, robot, cfg.cost, run_dir)
-    channel = None if cfg.operator_channel is None else Channel(cfg.operator_channel)
-    console = OperatorConsole(Answers(sys.stdin), unit=unit, bench=bench, channel=channel)
+    answers = Answers(sys.stdin)
+    channels = [] if cfg.operator_channel is None else [Channel(cfg.operator_channel)]
+    console = OperatorConsole(answers, unit=unit, bench=bench, channels=channels)
+    console.channels += person_channels(cfg.person, answers, console.say, run_dir)
     if mode == "console":
         return console
     from lerobot_contrast.operators.arm_setup import arm_operator
 
     return arm_operator(cfg.arm, robot, task, bench, console, run_dir, cfg.seed)
+
+
+def person_channels(args: PersonArgs, answers: Answers, say, run_dir) -> list[Any]:
+    """The person's page and notifications (--person.*), where asked for; the page's link printed, with its QR code
+    where it serves the local network."""
+    out: list[Any] = []
+    link = None
+    if args.page:
+        from lerobot_contrast.operators.person_page import PersonPage
+
+        page = PersonPage(args.port, args.lan, answers.offer, run_dir)
+        answers.taken.append(page.answered_elsewhere)
+        link = page.link()
+        print(f"the person's page: {link}", flush=True)
+        if args.lan:
+            import segno
+
+            segno.make(link, error="m").terminal(compact=True)
+        out.append(page)
+    if args.notify is not None:
+        from lerobot_contrast.operators.notify import Notifier
+
+        out.append(Notifier(args.notify, args.notify_format, say, link))
+    return out
 
 
 def run_fps(cfg: EvalConfig, robot: Robot) -> float | None:

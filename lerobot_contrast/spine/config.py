@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 import draccus
 
 from lerobot_contrast.operators.arm_args import ArmArgs
+from lerobot_contrast.operators.person_args import PersonArgs
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.spine.flags import ConfigError as ConfigError  # where the commands catch it
 from lerobot_contrast.staging.args import StagingArgs
@@ -138,6 +139,9 @@ class EvalConfig:
     # The arm as its own operator (--operator=arm): --arm.tries, --arm.pace, --arm.uncertainty, --arm.unsure,
     # --arm.audit.
     arm: ArmArgs = field(default_factory=ArmArgs)
+    # The person at the bench on their phone (--operator=console or arm): --person.page=true serves a page of each
+    # trial and the console's answers, --person.lan=true to the local network; --person.notify=URL (docs/phone.md).
+    person: PersonArgs = field(default_factory=PersonArgs)
 
 
 def resume_args(argv: list[str]) -> list[str]:
@@ -151,7 +155,7 @@ def resume_args(argv: list[str]) -> list[str]:
 
 # Choices of one session that a resumed run may make differently (the staging camera's included), so they are not
 # stored in config.json.
-SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging", "operator_channel", "clock")
+SESSION_CHOICES = ("rerun_aborted", "verbose", "lanes", "staging", "operator_channel", "clock", "person")
 
 
 # Settings of interleaved runs (--policies), left out of a single-policy run's config.json while at their default.

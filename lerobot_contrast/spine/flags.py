@@ -246,16 +246,23 @@ def flag_lines(cls: type, prefix: str, skip: tuple[str, ...] = ()) -> list[str]:
     return lines
 
 
-def help_text(cls: type, command: str, robot_type: str | None, arm: bool = False) -> str:
-    """The command's flags in full (the arm operator's `--arm.*` only with `arm`), then the chosen robot's fields, or
-    the robot types to choose from."""
+# Groups of flags that --help shows only for the operators they serve, else as one line.
+OPERATOR_GROUPS = {
+    "arm": (("arm",), "how the arm stages and labels: add --operator=arm to --help"),
+    "person": (("console", "arm"), "the person's phone page and messages: add --operator=console to --help"),
+}
+
+
+def help_text(cls: type, command: str, robot_type: str | None, operator: str | None = None) -> str:
+    """The command's flags in full (groups for an operator, as `--arm.*`, only with that `operator`), then the chosen
+    robot's fields, or the robot types to choose from."""
     from lerobot.robots import RobotConfig
 
     lines = [f"usage: {command} [--flag=value | --flag value] ...", "", (cls.__doc__ or "").strip(), ""]
-    hidden = () if arm or "arm" not in {f.name for f in dataclasses.fields(cls)} else ("arm",)
+    fields = {f.name for f in dataclasses.fields(cls)}
+    hidden = [name for name, (shown, _) in OPERATOR_GROUPS.items() if name in fields and operator not in shown]
     lines += flag_lines(cls, "", skip=("robot", *hidden))
-    if hidden:
-        lines += ["  --arm.*", "      How the arm stages and labels: add --operator=arm to --help for these settings."]
+    lines += [f"  {'--' + name + '.*':<12}{OPERATOR_GROUPS[name][1]}" for name in hidden]
     known = sorted(RobotConfig.get_known_choices())
     if robot_type in known:
         lines += ["", f"--robot.type={robot_type} settings:"]

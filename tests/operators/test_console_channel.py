@@ -24,7 +24,7 @@ from lerobot_contrast.twin.console_session import Lines
 
 def console(answers: str, channel_path=None) -> OperatorConsole:
     channel = None if channel_path is None else Channel(channel_path)
-    return OperatorConsole(Answers(io.StringIO(answers)), Console(file=io.StringIO()), channel=channel)
+    return OperatorConsole(Answers(io.StringIO(answers)), Console(file=io.StringIO()), channels=[channel])
 
 
 def context() -> TrialContext:

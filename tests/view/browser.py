@@ -11,7 +11,8 @@ CHROMIUM, DRIVER = shutil.which("chromium"), shutil.which("chromedriver")
 
 
 @contextmanager
-def chromium():
+def chromium(phone: bool = False):
+    """`phone`: a phone's screen (390x844 CSS pixels, touch), as the person's page is seen at the bench."""
     if not (CHROMIUM and DRIVER):
         if os.environ.get("CI"):
             pytest.fail("chromium and chromium-driver are missing in CI: scripts/setup.sh --dev installs them")
@@ -24,6 +25,8 @@ def chromium():
     for flag in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--window-size=1400,1000",
                  "--autoplay-policy=no-user-gesture-required", "--allow-file-access-from-files"):  # fmt: skip
         options.add_argument(flag)
+    if phone:
+        options.add_experimental_option("mobileEmulation", {"deviceMetrics": {"width": 390, "height": 844, "pixelRatio": 3.0, "touch": True}})
     driver = webdriver.Chrome(options=options, service=Service(DRIVER))
     try:
         yield driver

@@ -1,0 +1,79 @@
+"""--person.notify=URL: a local HTTP server receives a message for every label a session asks for and one when it
+ends or stops, as plain text or as Slack's {"text": ...}; a service that fails is said once and the session goes on."""
+
+import io
+import json
+import sys
+import threading
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+import pytest
+
+from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.eval import main
+from lerobot_contrast.operators.notify import Notifier
+from tests.test_operator_console import CONSOLE, journal
+
+
+@pytest.fixture
+def inbox():
+    """A local service that keeps each POST's content type and body."""
+    received: list[tuple[str, bytes]] = []
+
+    class Keep(BaseHTTPRequestHandler):
+        def do_POST(self):
+            received.append((self.headers["Content-Type"], self.rfile.read(int(self.headers["Content-Length"]))))
+            self.send_response(200)
+            self.send_header("Content-Length", "0")
+            self.end_headers()
+
+        def log_message(self, *args):
+            return
+
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Keep)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    yield f"http://127.0.0.1:{server.server_address[1]}/notify", received
+    server.shutdown()
+    server.server_close()
+
+
+def session(monkeypatch, run, answers, *flags) -> int:
+    monkeypatch.setattr(sys, "stdin", io.StringIO("".join(a + "\n" for a in answers)))
+    return main([*CONSOLE, f"--output_dir={run}", *flags])
+
+
+def test_every_label_asked_and_the_sessions_end_reach_the_service_as_text(tmp_path, monkeypatch, inbox):
+    url, received = inbox
+    assert session(monkeypatch, tmp_path / "run", [""] * 6, f"--person.notify={url}") == 0
+    texts = [body.decode() for kind, body in received]
+    assert all(kind == "text/plain" for kind, _ in received)
+    done = [r for r in journal(tmp_path / "run") if r["status"] == "done"]
+    asked = [t for t in texts if t.startswith("lerobot-contrast: a label is asked for trial")]
+    assert len(asked) == len(done) >= 1
+    assert texts[-1].startswith(f"lerobot-contrast: the session ended: {len(journal(tmp_path / 'run'))} trials in")
+
+
+def test_a_stop_reaches_the_service_as_slack_json_with_how_to_go_on(tmp_path, monkeypatch, inbox):
+    url, received = inbox
+    flags = (f"--person.notify={url}", "--person.notify_format=json")
+    assert session(monkeypatch, tmp_path / "run", ["", "q"], *flags) == 0  # staged, then stop at the label
+    last = json.loads(received[-1][1])
+    assert received[-1][0] == "application/json" and set(last) == {"text"}
+    assert last["text"].startswith("lerobot-contrast: the session stopped") and "--resume=true" in last["text"]
+
+
+def test_a_service_that_fails_is_said_once_and_the_session_goes_on(tmp_path, monkeypatch, capsys):
+    closed = "http://127.0.0.1:9/notify"  # the discard port: nothing listens
+    assert session(monkeypatch, tmp_path / "run", [""] * 6, f"--person.notify={closed}") == 0
+    out = capsys.readouterr().out
+    assert out.count("a notification to http://127.0.0.1:9/notify failed") == 1
+    assert all(r["status"] in ("done", "not_applicable") for r in journal(tmp_path / "run"))
+
+
+@pytest.mark.parametrize(("url", "form", "said"), [
+    ("ntfy.sh/topic", "text", "--person.notify=ntfy.sh/topic: give an http:// or https:// URL"),
+    ("http://127.0.0.1/x", "xml", "--person.notify_format: unknown 'xml'; choose from: text, json"),
+])  # fmt: skip
+def test_a_bad_url_or_format_is_one_line(url, form, said):
+    with pytest.raises(UserError, match=said.replace("(", r"\(").replace(")", r"\)")):
+        Notifier(url, form, print)
