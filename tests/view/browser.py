@@ -26,7 +26,9 @@ def chromium(phone: bool = False):
                  "--autoplay-policy=no-user-gesture-required", "--allow-file-access-from-files"):  # fmt: skip
         options.add_argument(flag)
     if phone:
-        options.add_experimental_option("mobileEmulation", {"deviceMetrics": {"width": 390, "height": 844, "pixelRatio": 3.0, "touch": True}})
+        options.add_experimental_option(
+            "mobileEmulation", {"deviceMetrics": {"width": 390, "height": 844, "pixelRatio": 3.0, "touch": True}}
+        )
     driver = webdriver.Chrome(options=options, service=Service(DRIVER))
     try:
         yield driver
