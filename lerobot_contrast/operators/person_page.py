@@ -1,8 +1,8 @@
-"""The person's page (`--person.page=true`): a page for a phone that shows what the console shows (each trial, what to
-move where, why a person is called, what was said) and answers its prompts with buttons. It is a console channel
-(operators/channel.py's messages come in through `send`) and a second source of the console's answers: an answer
-counts only for the prompt on screen and only while the terminal has not answered it (whichever answers first wins;
-the other is told).
+"""The person's page (`--person.page=true`), served as the viewer's pages are (the standard library's HTTP server): a
+page for a phone that shows what the console shows (each trial, what to move where, why a person is called, what was
+said) and answers its prompts with buttons. It is a console channel (operators/channel.py's messages come in through
+`send`) and a second source of the console's answers: an answer counts only for the prompt on screen and only while
+the terminal has not answered it (whichever answers first wins; the other is told).
 
 Who may use it: by default the server listens on 127.0.0.1 only and answers requests that name it as their Host (a
 web page whose name is rebound to 127.0.0.1 does not). With `--person.lan=true` it listens on every interface, and a
@@ -32,7 +32,7 @@ from urllib.parse import parse_qs, urlsplit
 
 from lerobot_contrast.contrast.errors import UserError
 
-PAGE = Path(__file__).with_name("static") / "person.html"
+PAGE = Path(__file__).with_name("person_page.html")
 TOKEN_FILE = "person_page.json"
 COOKIE = "lerobot_contrast_token"
 SAID_LINES = 8  # the console's last lines the page shows

@@ -146,7 +146,7 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
     console.channels += person_channels(cfg.person, answers, console.say, run_dir)
     if mode == "console":
         return console
-    from lerobot_contrast.operators.arm_setup import arm_operator
+    from lerobot_contrast.operators.arm.setup import arm_operator
 
     return arm_operator(cfg.arm, robot, task, bench, console, run_dir, cfg.seed)
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import draccus
 
-from lerobot_contrast.operators.arm_args import ArmArgs
+from lerobot_contrast.operators.arm.args import ArmArgs
 from lerobot_contrast.operators.person_args import PersonArgs
 from lerobot_contrast.policies.base import PolicyArgs
 from lerobot_contrast.spine.flags import ConfigError as ConfigError  # where the commands catch it

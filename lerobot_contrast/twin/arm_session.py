@@ -21,9 +21,9 @@ def connected_arm(twin: RunningTwin, table: Path, task_name: str, args: Any = No
 
     from lerobot_contrast.clock.robot_clock import use_clock
     from lerobot_contrast.domains import load_task
-    from lerobot_contrast.operators.arm import ArmOperator
-    from lerobot_contrast.operators.arm_args import ArmArgs
-    from lerobot_contrast.operators.arm_memory import ArmMemory
+    from lerobot_contrast.operators.arm.args import ArmArgs
+    from lerobot_contrast.operators.arm.memory import ArmMemory
+    from lerobot_contrast.operators.arm.operator import ArmOperator
     from lerobot_contrast.operators.console import Answers, OperatorConsole
     from lerobot_contrast.spine.build import make_robot, register_robots
     from lerobot_contrast.spine.config import EvalConfig

@@ -11,8 +11,8 @@ import pytest
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.domains import load_task
-from lerobot_contrast.operators.arm_args import ArmArgs
-from lerobot_contrast.operators.arm_setup import arm_operator
+from lerobot_contrast.operators.arm.args import ArmArgs
+from lerobot_contrast.operators.arm.setup import arm_operator
 from lerobot_contrast.so101 import arm, marker, plan, reach
 
 CAMERA = np.array([0.95, 0.45, 0.65])  # in front of the arm and to its left, above the table, as the twin's

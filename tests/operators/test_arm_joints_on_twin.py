@@ -8,8 +8,8 @@ import pytest
 
 from lerobot_contrast.contrast.errors import UserError
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.operators import arm_joints
-from lerobot_contrast.operators.arm_memory import ArmMemory
+from lerobot_contrast.operators.arm import joints as arm_joints
+from lerobot_contrast.operators.arm.memory import ArmMemory
 from lerobot_contrast.twin.arm_session import connected_arm
 from lerobot_contrast.twin.launch import running_twin
 from lerobot_contrast.twin.placement_client import PlacementClient

@@ -99,7 +99,7 @@ STAGE_THE_SPARE = """
 import json, sys, types
 from pathlib import Path
 from lerobot_contrast.contrast.scene import Pose, Scene
-from lerobot_contrast.operators.arm_memory import ArmMemory
+from lerobot_contrast.operators.arm.memory import ArmMemory
 from lerobot_contrast.twin.arm_session import connected_arm
 from tests.operators.test_arm_on_twin import trial
 flags, table, run_dir, scene = sys.argv[1:]

@@ -6,8 +6,8 @@ from types import SimpleNamespace
 import pytest
 
 from lerobot_contrast.contrast.audited import audited
-from lerobot_contrast.operators.arm import ArmOperator
-from lerobot_contrast.operators.arm_args import ArmArgs
+from lerobot_contrast.operators.arm.args import ArmArgs
+from lerobot_contrast.operators.arm.operator import ArmOperator
 from lerobot_contrast.operators.base import Label
 from lerobot_contrast.spine.runner import _label_notes
 
@@ -63,7 +63,7 @@ def test_a_trial_not_drawn_never_asks_and_a_person_may_still_stop():
 @pytest.mark.parametrize("share", [-0.1, 1.5])
 def test_a_share_outside_0_to_1_is_one_line(share):
     from lerobot_contrast.contrast.errors import UserError
-    from lerobot_contrast.operators.arm_setup import arm_operator
+    from lerobot_contrast.operators.arm.setup import arm_operator
 
     with pytest.raises(UserError, match=rf"--arm.audit={share:g}: give the share of trials a person labels too"):
         arm_operator(ArmArgs(audit=share), None, None, None, None, lambda: None, 0)

@@ -7,7 +7,7 @@ from lerobot_contrast.contrast.cost import InterventionCost, RobotTimeCost
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.trial import TrialRecord
 from lerobot_contrast.domains import load_task
-from lerobot_contrast.operators.arm_args import ArmArgs
+from lerobot_contrast.operators.arm.args import ArmArgs
 from lerobot_contrast.record.summary import format_summary, summarize
 from lerobot_contrast.so101 import PICK_AND_PLACE_S
 

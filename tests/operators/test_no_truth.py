@@ -4,8 +4,8 @@ above all), only LeRobot's robot, the camera calibration and the arm's model."""
 import subprocess
 import sys
 
-MODULES = ("lerobot_contrast.operators.arm", "lerobot_contrast.operators.arm_setup", "lerobot_contrast.staging.seeing",
-           "lerobot_contrast.so101.motion", "lerobot_contrast.operators.verdict")  # fmt: skip
+MODULES = ("lerobot_contrast.operators.arm.operator", "lerobot_contrast.operators.arm.setup", "lerobot_contrast.staging.seeing",
+           "lerobot_contrast.so101.motion", "lerobot_contrast.operators.arm.verdict")  # fmt: skip
 
 
 def test_the_arm_operator_imports_nothing_of_the_twin():

@@ -6,8 +6,8 @@ import pytest
 
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.domains import load_task
-from lerobot_contrast.operators.arm_args import ArmArgs
-from lerobot_contrast.operators.verdict import verdict
+from lerobot_contrast.operators.arm.args import ArmArgs
+from lerobot_contrast.operators.arm.verdict import verdict
 from lerobot_contrast.staging.seeing import _quarter, yaw_error
 
 

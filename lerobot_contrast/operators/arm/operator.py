@@ -22,11 +22,11 @@ from lerobot_contrast.contrast.audited import audited
 from lerobot_contrast.contrast.scene import Pose, Scene
 from lerobot_contrast.contrast.task import Judgement
 from lerobot_contrast.contrast.trial import TrialContext
-from lerobot_contrast.operators import arm_joints
-from lerobot_contrast.operators.arm_args import ArmArgs
-from lerobot_contrast.operators.arm_memory import ArmMemory, Spent
+from lerobot_contrast.operators.arm import joints as arm_joints
+from lerobot_contrast.operators.arm.args import ArmArgs
+from lerobot_contrast.operators.arm.memory import ArmMemory, Spent
+from lerobot_contrast.operators.arm.verdict import verdict
 from lerobot_contrast.operators.base import Label, SessionStopped, Staging
-from lerobot_contrast.operators.verdict import verdict
 from lerobot_contrast.so101 import plan, reach
 from lerobot_contrast.so101.motion import ArmMotion, Stopped
 from lerobot_contrast.staging import seeing

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from lerobot_contrast.contrast.errors import UserError
-from lerobot_contrast.operators.arm_args import AUDIT_AT, UNSURE, ArmArgs
+from lerobot_contrast.operators.arm.args import AUDIT_AT, UNSURE, ArmArgs
 
 
 def arm_operator(
@@ -44,7 +44,7 @@ def arm_operator(
             f"--arm.measure_joints finds the {marker.COLOUR} ball on the arm's jaw, and {purple[0]} has its colour: "
             "take it off the table while the joints are measured, or pass --arm.measure_joints=false"
         )
-    from lerobot_contrast.operators.arm import ArmOperator
-    from lerobot_contrast.operators.arm_memory import ArmMemory
+    from lerobot_contrast.operators.arm.memory import ArmMemory
+    from lerobot_contrast.operators.arm.operator import ArmOperator
 
     return ArmOperator(robot, task, bench, person, args, ArmMemory(run_dir), seed)
