@@ -81,7 +81,7 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
 
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     from lerobot_contrast.spine.evaluation import run
-    from lerobot_contrast.spine.run_end import ENDED_EARLY, say_ended_early
+    from lerobot_contrast.spine.run_end import ENDED_EARLY, finish, say_ended_early
 
     path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
     resume = f"--output_dir={path} --resume=true"
@@ -117,13 +117,6 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
 
         print(f"published: {publish_run(path, cfg.repo_id, private=cfg.private)}")
     return 0
-
-
-def finish(operator, text: str) -> None:
-    """Tell the person's channels (their page, notifications) that the session ended or stopped."""
-    console = getattr(operator, "person", operator)  # the arm's console is the person it calls
-    if hasattr(console, "finish"):
-        console.finish(text)
 
 
 def main(argv: list[str] | None = None) -> int:

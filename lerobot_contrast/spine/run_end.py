@@ -5,11 +5,19 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from typing import Any
 
 from lerobot_contrast.operators.base import SessionStopped
 from lerobot_contrast.spine.runner import RobotLostError
 
 ENDED_EARLY = (KeyboardInterrupt, SessionStopped, RobotLostError)
+
+
+def finish(operator: Any, text: str) -> None:
+    """Tell the person's channels (their page, notifications) that the session ended or stopped, as `text` says."""
+    console = getattr(operator, "person", operator)  # the arm's console is the person it calls
+    if hasattr(console, "finish"):
+        console.finish(text)
 
 
 def say_ended_early(

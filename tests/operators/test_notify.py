@@ -77,3 +77,17 @@ def test_a_service_that_fails_is_said_once_and_the_session_goes_on(tmp_path, mon
 def test_a_bad_url_or_format_is_one_line(url, form, said):
     with pytest.raises(UserError, match=said.replace("(", r"\(").replace(")", r"\)")):
         Notifier(url, form, print)
+
+
+def test_an_interleaved_session_says_it_ended_too(tmp_path, monkeypatch, inbox):
+    from tests.test_ab import TWO_ORACLES
+
+    url, received = inbox
+    monkeypatch.setattr(sys, "stdin", io.StringIO("\n" * 8))  # per policy and trial: staged, then the scene's label
+    flags = ["--n_instances=1", "--seed=5", "--perturbations=SB1", "--max_episode_steps=40", "--operator=console"]
+    assert (
+        main([*flags, f"--policies={TWO_ORACLES}", f"--output_dir={tmp_path / 'pair'}", f"--person.notify={url}"]) == 0
+    )
+    texts = [body.decode() for _, body in received]
+    assert sum(t.startswith("lerobot-contrast: a label is asked") for t in texts) == 4  # 2 trials x 2 policies
+    assert texts[-1].startswith("lerobot-contrast: the interleaved session ended: 4 trials of 2 policies in")
