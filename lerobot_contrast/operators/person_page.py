@@ -43,10 +43,18 @@ CLOSE_WAIT_S = 3.0  # at the session's end, time for an open page (it asks every
 
 class PersonPage:
     """The page's server and what it shows. `answer`: puts a line into the console's answers if none is waiting there
-    (returns False where the terminal answered first); `run_dir`: where the token is kept once the run has one."""
+    (returns False where the terminal answered first); `run_dir`: where the token is kept once the run has one;
+    `picture`: the calibrated camera's last overlay (its count, JPEG bytes), where there is one."""
 
-    def __init__(self, port: int, lan: bool, answer: Callable[[str], bool], run_dir: Callable[[], Path | None]) -> None:
-        self.answer, self.run_dir, self.lan = answer, run_dir, lan
+    def __init__(
+        self,
+        port: int,
+        lan: bool,
+        answer: Callable[[str], bool],
+        run_dir: Callable[[], Path | None],
+        picture: Callable[[], tuple[int, bytes] | None] = lambda: None,
+    ) -> None:
+        self.answer, self.run_dir, self.lan, self.picture = answer, run_dir, lan, picture
         self.token = _kept_token(run_dir()) or secrets.token_urlsafe(18)
         self._lock = threading.Lock()
         self.seq = 0  # changes with every prompt and event the console sends: what an answer names
@@ -120,7 +128,10 @@ class PersonPage:
         with self._lock:
             self._served = self.version
             open_prompt = None if self.answered else self.state["prompt"]
-            return {"seq": self.seq, "version": f"{self.started}.{self.version}", "prompt": open_prompt, "trial": self.state["trial"], "running": self.state["running"],
+            picture = self.picture()
+            shown = f"{self.started}.{self.version}.{0 if picture is None else picture[0]}"
+            return {"seq": self.seq, "version": shown, "picture": None if picture is None else picture[0],
+                    "prompt": open_prompt, "trial": self.state["trial"], "running": self.state["running"],
                     "ended": self.state["ended"], "said": list(self.said)}  # fmt: skip
 
     def take(self, seq: int, line: str, key: bool) -> tuple[HTTPStatus, str]:
@@ -213,6 +224,8 @@ class _Handler(BaseHTTPRequestHandler):
             return self._send(HTTPStatus.OK, PAGE.read_bytes(), "text/html; charset=utf-8")
         if path == "/state":
             return self._reply(HTTPStatus.OK, self.page.snapshot())
+        if path == "/picture.jpg" and (picture := self.page.picture()) is not None:
+            return self._send(HTTPStatus.OK, picture[1], "image/jpeg")
         return self._reply(HTTPStatus.NOT_FOUND, {"error": "no such page"})
 
     def do_POST(self) -> None:

@@ -143,7 +143,7 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
     answers = Answers(sys.stdin)
     channels = [] if cfg.operator_channel is None else [Channel(cfg.operator_channel)]
     console = OperatorConsole(answers, unit=unit, bench=bench, channels=channels)
-    console.channels += person_channels(cfg.person, answers, console.say, run_dir)
+    console.channels += person_channels(cfg.person, answers, console.say, run_dir, bench)
     if mode == "console":
         return console
     from lerobot_contrast.operators.arm.setup import arm_operator
@@ -151,15 +151,20 @@ def make_operator(cfg: EvalConfig, robot: Robot, task: Task, unit: str) -> Opera
     return arm_operator(cfg.arm, robot, task, bench, console, run_dir, cfg.seed)
 
 
-def person_channels(args: PersonArgs, answers: Answers, say, run_dir) -> list[Any]:
+def person_channels(args: PersonArgs, answers: Answers, say, run_dir, bench) -> list[Any]:
     """The person's page and notifications (--person.*), where asked for; the page's link printed, with its QR code
-    where it serves the local network."""
+    where it serves the local network. The page shows `bench`'s overlay where it draws one (a calibrated camera)."""
     out: list[Any] = []
     link = None
     if args.page:
         from lerobot_contrast.operators.person_page import PersonPage
 
-        page = PersonPage(args.port, args.lan, answers.offer, run_dir)
+        pictured = hasattr(bench, "wants_picture")
+        if pictured:
+            bench.wants_picture = True
+        page = PersonPage(
+            args.port, args.lan, answers.offer, run_dir, (lambda: bench.picture) if pictured else (lambda: None)
+        )
         answers.taken.append(page.answered_elsewhere)
         link = page.link()
         print(f"the person's page: {link}", flush=True)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 
 from lerobot_contrast.clock.robot_clock import robot_clock
@@ -65,6 +66,9 @@ class Bench:
         self.calibration, self.geometry, self.cost = calibration, geometry, cost
         self.tolerance, self.measured_cost = tolerance, measured_cost
         self.recording, self.run_dir = recording, run_dir
+        # With a person's page: the last overlay drawn on the camera's frame, as JPEG, and how many were drawn.
+        self.wants_picture = False
+        self.picture: tuple[int, bytes] | None = None
 
     def frame(self, robot: Any) -> np.ndarray | None:
         """The camera's image of now (on a simulated clock, of a moment after whatever was just placed)."""
@@ -121,10 +125,18 @@ class Bench:
         return _merged(_merged(staged, placed), self.measure(self.frame(robot)))
 
     def show(self, robot, believed: Scene, target: Scene, off, text: str | None, image=None) -> None:
-        if self.recording is None:  # --staging.viewer=none
+        """The targets (and with `off`, how far each object is from its own) over the camera's frame: in the Rerun
+        viewer (none with --staging.viewer=none), and as a picture for the person's page where there is one."""
+        if self.recording is None and not self.wants_picture:
             return
+        image = image if image is not None else self.frame(robot)
         marks = overlay.marks(self.calibration, believed, target, self.geometry.size, off)
-        overlay.log(self.recording, image if image is not None else self.frame(robot), marks, text)
+        if self.recording is not None:
+            overlay.log(self.recording, image, marks, text)
+        if self.wants_picture and image is not None:
+            drawn = cv2.cvtColor(overlay.draw(image, marks), cv2.COLOR_RGB2BGR)
+            count = 1 if self.picture is None else self.picture[0] + 1
+            self.picture = (count, cv2.imencode(".jpg", drawn, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes())
 
     def _off(self, target: Scene, seen: Mapping[str, Pose]) -> dict[str, float | None]:
         """How far each checked object is from its target when past the tolerance (0.0: within it; None: not

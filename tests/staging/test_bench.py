@@ -4,6 +4,7 @@ placed off target, what the journal records of it, and resuming a run stopped mi
 import dataclasses
 import io
 import json
+import urllib.request
 
 import cv2
 import numpy as np
@@ -21,6 +22,7 @@ from lerobot_contrast.domains.task_file.loader import load_task_file
 from lerobot_contrast.eval import equipped, planned_evaluation
 from lerobot_contrast.operators.base import SessionStopped
 from lerobot_contrast.operators.console import Answers, OperatorConsole
+from lerobot_contrast.operators.person_page import PersonPage
 from lerobot_contrast.policies import make_policy
 from lerobot_contrast.spine.config import EvalConfig
 from lerobot_contrast.spine.evaluation import run
@@ -181,3 +183,21 @@ def test_without_scene_reports_the_next_trial_starts_from_where_the_camera_saw_t
         first["scene_after"]["objects"]["red_cube"][:2], abs=0.01
     )
     robot.disconnect()
+
+
+def test_the_persons_page_shows_the_cameras_overlay_of_each_trial(tmp_path, calibration, robot):
+    robot.script = ["exact", "exact"]
+    ev = evaluation(tmp_path / "run", calibration, robot, ["", "", "", ""])
+    bench = ev.operator.bench
+    bench.wants_picture = True
+    page = PersonPage(0, False, lambda line: False, lambda: tmp_path, lambda: bench.picture)
+    ev.operator.channels.append(page)
+    try:
+        run(ev)
+        state = json.loads(urllib.request.urlopen(f"http://127.0.0.1:{page.port}/state", timeout=10).read())
+        assert state["picture"] == bench.picture[0] >= 2  # before staging, and as measured after
+        jpeg = urllib.request.urlopen(f"http://127.0.0.1:{page.port}/picture.jpg", timeout=10).read()
+        shown = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+        assert shown.shape[:2] == robot.get_observation()["top"].shape[:2]  # the camera's frame, drawn on
+    finally:
+        page.close()
