@@ -28,13 +28,16 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
+def console_session(run, port: int, *flags: str) -> list[str]:
+    return [sys.executable, "-m", "lerobot_contrast.eval", *CONSOLE, f"--output_dir={run}", "--rerun=false",
+            "--person.page=true", f"--person.port={port}", *flags]  # fmt: skip
+
+
 class Session:
     """The session, its terminal left unanswered (a pipe nobody writes to): every answer comes from the page. Its
     output is read as it comes (a full pipe would stall it)."""
 
-    def __init__(self, run, port: int, *flags: str) -> None:
-        command = [sys.executable, "-m", "lerobot_contrast.eval", *CONSOLE, f"--output_dir={run}", "--rerun=false",
-                   "--person.page=true", f"--person.port={port}", *flags]  # fmt: skip
+    def __init__(self, command: list[str]) -> None:
         self.process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True)  # fmt: skip
         self.lines: list[str] = []
@@ -61,7 +64,7 @@ def press(driver, prompt: str, answer: str, timeout: float = 120) -> None:
 
 def test_a_session_answered_from_a_phone_with_an_undo_a_stop_and_the_resume(tmp_path):
     run, port = tmp_path / "run", free_port()
-    session = Session(run, port)
+    session = Session(console_session(run, port))
     with chromium(phone=True) as driver:
         try:
             driver.get(f"http://127.0.0.1:{port}/")
@@ -78,7 +81,7 @@ def test_a_session_answered_from_a_phone_with_an_undo_a_stop_and_the_resume(tmp_
             assert len(labelled) == 1 and labelled[0]["success"] is False  # the label given again, not the undone one
             assert "the session stopped" in driver.find_element(By.ID, "ended").text  # seen before its server closed
             WebDriverWait(driver, 20).until(lambda d: "reconnecting" in d.find_element(By.ID, "status").text)
-            session = Session(run, port, "--resume=true")
+            session = Session(console_session(run, port, "--resume=true"))
             ended = lambda d: "the session ended" in d.find_element(By.ID, "ended").text  # noqa: E731
             for _ in range(5):  # each trial left: staged, then labelled a success
                 WebDriverWait(driver, 120).until(lambda d: d.find_element(By.ID, "prompt").get_attribute("data-prompt")
