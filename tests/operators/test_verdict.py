@@ -1,4 +1,4 @@
-"""The camera's labels near the goal's boundary: sure only where shifting the named objects by the camera's
+"""The camera's labels near the goal's boundary: sure only where shifting the named objects by up to the camera's
 uncertainty keeps the verdict; a named object unseen is never guessed."""
 
 import numpy as np
@@ -32,6 +32,28 @@ def test_a_cube_near_the_boundary_of_next_to_is_unsure(task, gap, success, sure)
     said = verdict(task.is_achieved, instance, scene, (), (), 0.01)
     assert (said.success, said.sure) == (success, sure)
     assert ("boundary" in said.why) == (not sure)
+
+
+@pytest.mark.parametrize(("band_share", "sure"), [(0.95, False), (1.05, True)])
+def test_a_boundary_within_the_band_is_found_in_any_direction(task, band_share, sure):
+    """The subject off the base at 22.5 degrees (between the compass points), the boundary 0.95 or 1.05 bands away."""
+    instance = near_instance(task)
+    predicate = instance.goal["predicate"]
+    gap, angle = predicate["within"] - band_share * 0.01, np.pi / 8
+    subject = Pose(0.30 + gap * np.cos(angle), gap * np.sin(angle))
+    scene = Scene({**instance.scene.objects, predicate["near"]: Pose(0.30, 0.0), predicate["subject"]: subject})
+    said = verdict(task.is_achieved, instance, scene, (), (), 0.01)
+    assert (said.success, said.sure) == (True, sure)
+
+
+def test_a_band_wider_than_the_goal_asks_for_every_label(task):
+    """Half a metre of doubt: any verdict could turn, however far the subject lies from its goal."""
+    instance = near_instance(task)
+    predicate = instance.goal["predicate"]
+    for gap in (0.02, 0.10, 0.30):
+        scene = Scene({**instance.scene.objects, predicate["near"]: Pose(0.30, 0.0),
+                       predicate["subject"]: Pose(0.30 + gap, 0.05)})  # fmt: skip
+        assert not verdict(task.is_achieved, instance, scene, (), (), 0.5).sure
 
 
 def test_an_unseen_or_held_subject_is_not_a_success(task):

@@ -21,7 +21,7 @@ class ArmArgs:
     # Each motion's time as a multiple of the planner's (larger: slower and surer).
     pace: float = 1.5
     # Metres the camera may be off in what a goal tests (a cube's distance from another, or from a bin's centre): a
-    # label that turns when a named object is moved this far is unsure. Measure your bench's (docs/unattended.md);
+    # label that turns when a named object is moved up to this far is unsure. Measure your bench (docs/unattended.md);
     # the default covers the twin's camera, measured by scripts/bench/bench_seeing.py at 0.21 cm (p95).
     uncertainty: float = 0.003
     # What an unsure label does: ask (a person at the console labels it) or unlabelled (recorded for review later).
