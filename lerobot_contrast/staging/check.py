@@ -138,6 +138,18 @@ class Bench:
             count = 1 if self.picture is None else self.picture[0] + 1
             self.picture = (count, cv2.imencode(".jpg", drawn, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes())
 
+    def show_seen(self, robot, target: Scene, text: str) -> None:
+        """The targets over the camera's frame, each object's arrow from where the camera sees it now (one it does
+        not see marked to bring in): what the arm's call for a person shows."""
+        if self.recording is None and not self.wants_picture:
+            return
+        image = self.frame(robot)
+        if image is None:
+            return
+        untracked = {name: pose for name, pose in target.objects.items() if name not in self.geometry.colours}
+        believed = Scene({**untracked, **self.measure(image)}, target.robot)
+        self.show(robot, believed, target, None, text, image)
+
     def _off(self, target: Scene, seen: Mapping[str, Pose]) -> dict[str, float | None]:
         """How far each checked object is from its target when past the tolerance (0.0: within it; None: not
         seen)."""

@@ -1,6 +1,7 @@
 """On the twin, the arm's session answered from the person's page on a phone's screen (headless Chromium): its call
-for a person (a cube it cannot see, put back by hand while the page waits), the labels it asks for (the audit's, one
-taken back with undo and given again), a stop, and the resume, which the open page reconnects to by itself."""
+for a person (a cube it cannot see, put back by hand while the page shows the camera's frame with the targets), the
+labels it asks for (the audit's, one taken back with undo and given again), a stop, and the resume, which the open
+page reconnects to by itself."""
 
 import json
 import urllib.request
@@ -41,6 +42,9 @@ def test_the_arms_call_and_labels_answered_on_a_phone_with_an_undo_a_stop_and_th
                 WebDriverWait(driver, 300).until(lambda d: prompt_of(d) == "call")
                 assert "A person is needed: red_cube: not seen" in driver.find_element(By.ID, "prompt").text
                 state = json.loads(urllib.request.urlopen(f"http://127.0.0.1:{port}/state", timeout=10).read())
+                assert state["picture"] is not None  # the camera's frame with where each object goes
+                WebDriverWait(driver, 10).until(lambda d: d.execute_script(
+                    "const p = document.getElementById('picture'); return !p.hidden && p.naturalWidth > 0"))  # fmt: skip
                 placement.place("red_cube", *state["prompt"]["fix"]["red_cube"])  # the person's hands
                 press(driver, "call", "")  # fixed
                 press(driver, "label", "y", timeout=300)

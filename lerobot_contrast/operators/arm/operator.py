@@ -281,6 +281,7 @@ class ArmOperator:
         started, started_clock = time.monotonic(), robot_clock().now()
         fix = {name: None if (goal := target.objects.get(name)) is None else [goal.x, goal.y] for name in trouble}
         said = "; ".join(f"{name}: {why}" for name, why in trouble.items())
+        self.camera.show_seen(self.robot, target, f"a person is needed: {said}")
         answer = self.person.call(said, fix)
         self._person_s += time.monotonic() - started
         self._person_clock_s += robot_clock().now() - started_clock
