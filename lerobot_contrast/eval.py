@@ -81,7 +81,7 @@ def plan_and_run(cfg: EvalConfig, chosen_robot: str | None = None) -> int:
 
 def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     from lerobot_contrast.spine.evaluation import run
-    from lerobot_contrast.spine.run_end import ENDED_EARLY, finish, say_ended_early
+    from lerobot_contrast.spine.run_end import ENDED_EARLY, finish, say_ended_early, tell_stopped
 
     path, unit = Path(evaluation.output_dir), evaluation.cost_model.unit
     resume = f"--output_dir={path} --resume=true"
@@ -94,11 +94,10 @@ def run_and_report(cfg: EvalConfig, evaluation: Evaluation) -> int:
     try:
         with progress:
             results = run(dataclasses.replace(evaluation, progress=progress))
-    except ENDED_EARLY as error:
-        why = " ".join(str(error).split()) or "interrupted"
-        finish(
-            evaluation.operator, f"the session stopped ({why}); continue with python -m lerobot_contrast.eval {resume}"
-        )
+    except BaseException as error:  # told on the person's page and in a message, however the session stops
+        tell_stopped(evaluation.operator, error, f"python -m lerobot_contrast.eval {resume}")
+        if not isinstance(error, ENDED_EARLY):
+            raise
         return say_ended_early(error, resume, f"in {journal}", recorded=lambda: len(read_journal(journal)))
     finish(evaluation.operator, f"the session ended: {len(results.records)} trials in {path}")
     from lerobot_contrast.reporting.run_table import results_table  # pandas and scipy, needed only now

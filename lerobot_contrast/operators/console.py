@@ -43,13 +43,17 @@ class Answers:
         self.taken: list[Callable[[], None]] = []  # told each time an answer is taken (the person's page)
         threading.Thread(target=self._read, args=(stream,), daemon=True, name="operator-input").start()
 
-    def offer(self, line: str) -> bool:
+    def offer(self, line: str, key: bool = False) -> bool:
         """Queue an answer from elsewhere than the stream (the person's page), unless one is already waiting: the
-        first answer to a prompt counts, and a second would answer the prompt after it."""
+        first answer to a prompt counts, and a second would answer the prompt after it. An in-trial `key` goes
+        first in the queue, where take_key looks, whatever else waits there (an emergency stop above all)."""
         with self._ready:
-            if self._lines:
+            if key:
+                self._lines.appendleft(line)
+            elif self._lines:
                 return False
-            self._lines.append(line)
+            else:
+                self._lines.append(line)
             self._ready.notify_all()
             return True
 

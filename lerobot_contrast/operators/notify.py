@@ -25,7 +25,12 @@ class Notifier:
     def __init__(self, url: str, form: str, say: Callable[[str], None], link: str | None = None) -> None:
         if form not in NOTIFY_FORMATS:
             raise UserError(f"--person.notify_format: unknown {form!r}; choose from: {', '.join(NOTIFY_FORMATS)}")
-        if not url.startswith(("http://", "https://")):
+        try:
+            parsed = httpx.URL(url)
+        except httpx.InvalidURL as error:
+            raise UserError(f"--person.notify={url}: not a URL ({error}); give the http:// or https:// one to POST the "
+                            "messages to") from None  # fmt: skip
+        if parsed.scheme not in ("http", "https") or not parsed.host:
             raise UserError(f"--person.notify={url}: give an http:// or https:// URL to POST the messages to")
         self.url, self.form, self.say, self.link = url, form, say, link
         self._queue: queue.Queue[str | None] = queue.Queue()
@@ -52,7 +57,7 @@ class Notifier:
                     else:
                         answer = client.post(self.url, content=text.encode(), headers={"Content-Type": "text/plain"})
                     answer.raise_for_status()
-                except httpx.HTTPError as error:
+                except Exception as error:  # whatever the service or the network does, the session goes on
                     if not self._failed:
                         self._failed = True
                         self.say(f"[yellow]a notification to {self.url} failed ({' '.join(str(error).split())[:160]}); "

@@ -15,7 +15,7 @@ class PersonArgs:
     # Serve a page for a phone: each trial (what to move where), why a person is called, and the console's answers
     # as buttons. The terminal and the page are two views of one console: whichever answers first counts.
     page: bool = False
-    # The page's port (the same one again after --resume=true, so an open page reconnects by itself).
+    # The page's port (pass the --person.* flags again with --resume=true: an open page then reconnects by itself).
     port: int = 7577
     # Serve the page to the local network too, with a token in its link (printed with a QR code); without it, the
     # page answers this machine only (127.0.0.1).

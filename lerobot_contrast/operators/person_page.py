@@ -42,15 +42,15 @@ CLOSE_WAIT_S = 3.0  # at the session's end, time for an open page (it asks every
 
 
 class PersonPage:
-    """The page's server and what it shows. `answer`: puts a line into the console's answers if none is waiting there
-    (returns False where the terminal answered first); `run_dir`: where the token is kept once the run has one;
+    """The page's server and what it shows. `answer(line, key)`: puts a line into the console's answers if none is
+    waiting there (returns False where the terminal answered first; an in-trial key goes in first); `run_dir`: where the token is kept once the run has one;
     `picture`: the calibrated camera's last overlay (its count, JPEG bytes), where there is one."""
 
     def __init__(
         self,
         port: int,
         lan: bool,
-        answer: Callable[[str], bool],
+        answer: Callable[[str, bool], bool],
         run_dir: Callable[[], Path | None],
         picture: Callable[[], tuple[int, bytes] | None] = lambda: None,
     ) -> None:
@@ -77,21 +77,21 @@ class PersonPage:
         self.port = self.server.server_address[1]
         threading.Thread(target=self.server.serve_forever, daemon=True, name="person-page").start()
 
-    def link(self) -> str:
-        """The page's address: on the LAN with its token (for the QR code), else this machine's."""
+    def link(self, token: bool = True) -> str:
+        """The page's address: on the LAN with its token (for the QR code; `token=False` for a message sent through
+        somebody else's service, which a phone that scanned the code opens with its cookie), else this machine's."""
         if not self.lan:
             return f"http://127.0.0.1:{self.port}/"
-        return f"http://{_lan_address()}:{self.port}/?token={self.token}"
+        return f"http://{_lan_address()}:{self.port}/" + (f"?token={self.token}" if token else "")
 
     # --- a console channel ---
     def send(self, **message: Any) -> None:
         with self._lock:
             self.seq += 1
             self.version += 1
-            if "prompt" in message:
-                self.state["prompt"], self.answered = message, False
-                if message["prompt"] in ("stage", "label", "call"):
-                    self.state["running"] = False
+            if "prompt" in message:  # every prompt (an aborted trial's too) comes after the episode's keys
+                self.state.update(prompt=message, running=False)
+                self.answered = False
             elif message.get("event") == "trial":
                 self.state.update(trial=message, prompt=None, running=False)
                 self.answered = True
@@ -99,6 +99,8 @@ class PersonPage:
             elif message.get("event") == "running":
                 self.state.update(prompt=None, running=True)
                 self.answered = True
+            elif message.get("event") == "ended":  # the episode's end, said before the arm looks and labels
+                self.state["running"] = False
             elif message.get("event") == "session":
                 self.state.update(prompt=None, running=False, ended=message["text"])
                 self.answered = True
@@ -144,7 +146,7 @@ class PersonPage:
                 return HTTPStatus.CONFLICT, "that was answered already (at the terminal, or on another page)"
             elif seq != self.seq:
                 return HTTPStatus.CONFLICT, "the session has moved on since: look again"
-            if not self.answer(line):
+            if not self.answer(line, key):
                 return HTTPStatus.CONFLICT, "the terminal answered first"
             if not key:
                 self.answered = True
@@ -157,8 +159,10 @@ class PersonPage:
         local = {f"127.0.0.1:{self.port}", f"localhost:{self.port}"}
         if ipaddress.ip_address(client).is_loopback and host in local:
             return True
-        given = query_token or _cookie_token(cookie)
-        return self.lan and given is not None and hmac.compare_digest(given, self.token)
+        return self.lan and self.token_matches(query_token or _cookie_token(cookie))
+
+    def token_matches(self, given: str | None) -> bool:
+        return given is not None and hmac.compare_digest(given.encode("utf-8", "replace"), self.token.encode())
 
     def _keep_token(self) -> None:
         run_dir = self.run_dir()
@@ -216,7 +220,8 @@ class _Handler(BaseHTTPRequestHandler):
         path, query = urlsplit(self.path).path, parse_qs(urlsplit(self.path).query)
         if path == "/" and "token" in query:  # the QR link: keep the token in a cookie, and drop it from the address
             self.send_response(HTTPStatus.SEE_OTHER)
-            self.send_header("Set-Cookie", f"{COOKIE}={query['token'][0]}; HttpOnly; SameSite=Strict; Path=/")
+            if self.page.token_matches(query["token"][0]):  # the page's own token only: nothing of the query's
+                self.send_header("Set-Cookie", f"{COOKIE}={self.page.token}; HttpOnly; SameSite=Strict; Path=/")
             self.send_header("Location", "/")
             self.send_header("Content-Length", "0")
             return self.end_headers()
@@ -238,8 +243,8 @@ class _Handler(BaseHTTPRequestHandler):
             return self._reply(HTTPStatus.FORBIDDEN, {"error": "answers are taken from the page itself only"})
         if self.headers.get("Content-Type", "").split(";")[0].strip() != "application/json":
             return self._reply(HTTPStatus.UNSUPPORTED_MEDIA_TYPE, {"error": "send the answer as JSON"})
-        length = int(self.headers.get("Content-Length") or 0)
         try:
+            length = int(self.headers.get("Content-Length") or 0)
             if not 0 < length <= MAX_BODY:
                 raise ValueError
             said = json.loads(self.rfile.read(length))

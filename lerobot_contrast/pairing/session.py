@@ -23,7 +23,7 @@ from lerobot_contrast.record.third_party import third_party_output
 from lerobot_contrast.spine.build import choose_robot, make_operator, make_robot, needs_camera
 from lerobot_contrast.spine.config import ConfigError, EvalConfig, config_json
 from lerobot_contrast.spine.evaluation import Evaluation
-from lerobot_contrast.spine.run_end import ENDED_EARLY, finish, say_ended_early
+from lerobot_contrast.spine.run_end import ENDED_EARLY, finish, say_ended_early, tell_stopped
 from lerobot_contrast.spine.run_setup import (
     connect,
     default_output_dir,
@@ -111,10 +111,10 @@ class Session:
         try:
             with disk_full_said(self.path, f"resume with {self.resume_hint}"):
                 monitor, records, reason = self.run()
-        except ENDED_EARLY as error:
-            why = " ".join(str(error).split()) or "interrupted"
-            resume = f"python -m lerobot_contrast.eval {self.resume_hint}"
-            finish(self.first.operator, f"the session stopped ({why}); continue with {resume}")
+        except BaseException as error:  # told on the person's page and in a message, however the session stops
+            tell_stopped(self.first.operator, error, f"python -m lerobot_contrast.eval {self.resume_hint}")
+            if not isinstance(error, ENDED_EARLY):
+                raise
             return say_ended_early(error, self.resume_hint, "journalled")
         self.print_end(monitor, records, reason)
         ran = sum(len(seat) for seat in records.values())

@@ -17,6 +17,12 @@ from typing import Any
 AUDIT_FILE = "audit.jsonl"
 
 
+def drawn(extra: dict[str, Any]) -> bool:
+    """Whether a journalled trial (its `extra`) was drawn for the audit: its label waits on the audit page
+    (`audit_drawn`), or the person gave it live (`audit`)."""
+    return bool(extra.get("audit_drawn")) or "audit" in extra
+
+
 def append_label(run_dir: Path, trial: int, success: bool, seconds: float | None) -> dict[str, Any]:
     """Keep a person's label of `trial`; `seconds`: how long they took to give it after the episode's video ended."""
     line = {"trial": int(trial), "success": bool(success), "at": round(time.time(), 3)}

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from lerobot_contrast.contrast import audited
-from lerobot_contrast.record.audit_labels import read_labels
+from lerobot_contrast.record.audit_labels import drawn, read_labels
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.markdown import num, perturbation_name, table
 from lerobot_contrast.reporting.runs import Run
@@ -31,7 +31,7 @@ def labelled(run: Run) -> pd.DataFrame:
     person = [e.get("audit", later.get(int(i), {}).get("success")) for e, i in zip(extra, rows["index"], strict=True)]
     person = pd.Series(person, index=rows.index, dtype=object)
     return rows.assign(label=rows["success"].astype(float), audited=person.notna(),
-                       drawn=extra.map(lambda e: bool(e.get("audit_drawn")) or "audit" in e),
+                       drawn=extra.map(drawn),
                        person=person.map(lambda said: np.nan if said is None else float(said)))  # fmt: skip
 
 

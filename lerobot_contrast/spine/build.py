@@ -155,7 +155,7 @@ def person_channels(args: PersonArgs, answers: Answers, say, run_dir, bench) -> 
     """The person's page and notifications (--person.*), where asked for; the page's link printed, with its QR code
     where it serves the local network. The page shows `bench`'s overlay where it draws one (a calibrated camera)."""
     out: list[Any] = []
-    link = None
+    told = None  # the page's link in messages: without its token, which would pass through the service's hands
     if args.page:
         from lerobot_contrast.operators.person_page import PersonPage
 
@@ -166,7 +166,7 @@ def person_channels(args: PersonArgs, answers: Answers, say, run_dir, bench) -> 
             args.port, args.lan, answers.offer, run_dir, (lambda: bench.picture) if pictured else (lambda: None)
         )
         answers.taken.append(page.answered_elsewhere)
-        link = page.link()
+        link, told = page.link(), page.link(token=False)
         print(f"the person's page: {link}", flush=True)
         if args.lan:
             import segno
@@ -176,7 +176,7 @@ def person_channels(args: PersonArgs, answers: Answers, say, run_dir, bench) -> 
     if args.notify is not None:
         from lerobot_contrast.operators.notify import Notifier
 
-        out.append(Notifier(args.notify, args.notify_format, say, link))
+        out.append(Notifier(args.notify, args.notify_format, say, told))
     return out
 
 

@@ -20,6 +20,13 @@ def finish(operator: Any, text: str) -> None:
         console.finish(text)
 
 
+def tell_stopped(operator: Any, error: BaseException, resume: str) -> None:
+    """Tell the person's channels that the session stopped on `error` (an interruption, the operator's stop, a lost
+    robot, or a failure), with the command that continues it (`resume`)."""
+    why = " ".join(str(error).split()) or "interrupted"
+    finish(operator, f"the session stopped ({why}); continue with {resume}")
+
+
 def say_ended_early(
     error: KeyboardInterrupt | SessionStopped | RobotLostError,
     resume: str,

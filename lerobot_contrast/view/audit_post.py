@@ -16,8 +16,8 @@ from http import HTTPStatus
 from pathlib import Path
 from typing import Any
 
-from lerobot_contrast.record.audit_labels import append_label
-from lerobot_contrast.record.journal import read_journal
+from lerobot_contrast.record.audit_labels import append_label, drawn
+from lerobot_contrast.record.journal import JournalError, read_journal
 
 MAX_BODY = 1024  # bytes: a label is a few dozen
 
@@ -51,11 +51,15 @@ def take_label(run_dir: Path, body: bytes) -> dict[str, Any]:
     except (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, AttributeError):
         raise Refused(HTTPStatus.BAD_REQUEST, 'give {"trial": N, "success": true or false, "seconds": S}') from None
     journal = Path(run_dir) / "journal.jsonl"
-    record = next((r for r in (read_journal(journal) if journal.is_file() else []) if r.index == trial), None)
+    try:
+        records = read_journal(journal) if journal.is_file() else []
+    except JournalError as error:
+        raise Refused(HTTPStatus.CONFLICT, f"the run's journal cannot be read ({error})") from None
+    record = next((r for r in records if r.index == trial), None)
     if record is None:
         raise Refused(HTTPStatus.NOT_FOUND, f"trial {trial} is not in this run's journal")
     if record.status != "done":
         raise Refused(HTTPStatus.CONFLICT, f"trial {trial} is {record.status}, not done: there is no outcome to label")
-    if not (record.extra.get("audit_drawn") or "audit" in record.extra):
+    if not drawn(record.extra):
         raise Refused(HTTPStatus.CONFLICT, f"trial {trial} was not drawn for the audit; label only those it drew")
     return append_label(run_dir, trial, success, seconds)

@@ -67,10 +67,10 @@ class Handler(SimpleHTTPRequestHandler):
             run_dir = self.pages.run_dir(match.group(1))
             if run_dir is None:
                 raise Refused(HTTPStatus.NOT_FOUND, f"no run {match.group(1)} on this page")
-            length = int(self.headers.get("Content-Length") or 0)
-            if not 0 < length <= MAX_BODY:
+            length = self.headers.get("Content-Length") or "0"
+            if not (length.isdigit() and 0 < int(length) <= MAX_BODY):
                 raise Refused(HTTPStatus.BAD_REQUEST, f"a label is one short JSON object (at most {MAX_BODY} bytes)")
-            kept = take_label(run_dir, self.rfile.read(length))
+            kept = take_label(run_dir, self.rfile.read(int(length)))
         except Refused as refused:
             return self._json({"error": str(refused)}, refused.status)
         except OSError as error:

@@ -11,6 +11,7 @@ import numpy as np
 
 from lerobot_contrast.contrast.scene import Scene
 from lerobot_contrast.contrast.trial import TrialRecord
+from lerobot_contrast.record.audit_labels import drawn
 from lerobot_contrast.reporting import stats
 from lerobot_contrast.reporting.runs import Run
 
@@ -90,7 +91,7 @@ def trial_json(record: TrialRecord, later: dict[str, Any] | None = None) -> dict
         "staging_check": record.extra.get("staging"),
         "label_asked": bool(record.extra.get("label_asked")),  # a person labelled it where the arm's camera was unsure
         "audit": audit,  # a person's label of a trial the audit drew (--arm.audit), at the bench or later, else None
-        "audit_drawn": bool(record.extra.get("audit_drawn")) or "audit" in record.extra,
+        "audit_drawn": drawn(record.extra),
         "audit_seconds": None if later is None else later.get("seconds"),
     }
 

@@ -7,6 +7,7 @@ import sys
 import threading
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
+import httpx
 import pytest
 
 from lerobot_contrast.contrast.errors import UserError
@@ -73,6 +74,7 @@ def test_a_service_that_fails_is_said_once_and_the_session_goes_on(tmp_path, mon
 @pytest.mark.parametrize(("url", "form", "said"), [
     ("ntfy.sh/topic", "text", "--person.notify=ntfy.sh/topic: give an http:// or https:// URL"),
     ("http://127.0.0.1/x", "xml", "--person.notify_format: unknown 'xml'; choose from: text, json"),
+    ("http://host:abc/", "text", "--person.notify=http://host:abc/: not a URL (Invalid port: 'abc')"),
 ])  # fmt: skip
 def test_a_bad_url_or_format_is_one_line(url, form, said):
     with pytest.raises(UserError, match=said.replace("(", r"\(").replace(")", r"\)")):
@@ -91,3 +93,18 @@ def test_an_interleaved_session_says_it_ended_too(tmp_path, monkeypatch, inbox):
     texts = [body.decode() for _, body in received]
     assert sum(t.startswith("lerobot-contrast: a label is asked") for t in texts) == 4  # 2 trials x 2 policies
     assert texts[-1].startswith("lerobot-contrast: the interleaved session ended: 4 trials of 2 policies in")
+
+
+def test_whatever_a_service_raises_is_said_once_and_later_messages_still_go(monkeypatch):
+    tried, said = [], []
+
+    def post(client, url, **kwargs):
+        tried.append(url)
+        raise ValueError("a service that answers nonsense")
+
+    monkeypatch.setattr(httpx.Client, "post", post)
+    notifier = Notifier("http://127.0.0.1:9/notify", "text", said.append)
+    for trial in range(3):
+        notifier.send(prompt="label", trial=trial, instruction="put the red cube in the left bin")
+    notifier.close()
+    assert len(tried) == 3 and len(said) == 1 and "a service that answers nonsense" in said[0]

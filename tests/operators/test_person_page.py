@@ -2,6 +2,7 @@
 moved on; from another machine only with the session's token (kept in a cookie from the QR link); answers only as
 JSON from the page's own origin; and a name rebound to 127.0.0.1 is not served."""
 
+import http.client
 import io
 import json
 import os
@@ -12,7 +13,9 @@ import urllib.request
 import pytest
 
 from lerobot_contrast.operators.console import Answers
+from lerobot_contrast.operators.person_args import PersonArgs
 from lerobot_contrast.operators.person_page import PersonPage, _lan_address
+from lerobot_contrast.spine.build import person_channels
 
 
 class Stream:
@@ -44,6 +47,19 @@ def ask(url: str, body: dict | None = None, **headers) -> tuple[int, dict, dict]
             return answer.status, dict(answer.headers), json.loads(answer.read() or b"{}")
     except urllib.error.HTTPError as error:
         return error.code, dict(error.headers), json.loads(error.read() or b"{}")
+
+
+def raw_post(port: int, path: str, **headers) -> int:
+    """A POST with the headers as given (a Content-Length no client library would send); its status."""
+    connection = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+    try:
+        connection.putrequest("POST", path)
+        for name, value in headers.items():
+            connection.putheader(name.replace("_", "-"), value)
+        connection.endheaders()
+        return connection.getresponse().status
+    finally:
+        connection.close()
 
 
 class NoRedirect(urllib.request.HTTPRedirectHandler):
@@ -114,3 +130,57 @@ def test_keys_reach_the_running_episode_only_while_it_runs(bench):
     while (key := answers.take_key()) is None and time.monotonic() < deadline:
         time.sleep(0.01)
     assert key == "estop"
+
+
+def test_the_links_token_never_writes_a_header_and_messages_carry_no_token(bench, tmp_path):
+    page, _, _ = bench
+    local = f"http://127.0.0.1:{page.port}/"
+    status, headers, _ = ask(local + "?token=x%0d%0aX-Injected:%201%0d%0a%0d%0a%3Cscript%3E")  # a site's link
+    assert status == 303 and "Set-Cookie" not in headers and "X-Injected" not in headers
+    status, headers, _ = ask(local + f"?token={page.token}")
+    assert status == 303 and headers["Set-Cookie"].startswith(f"lerobot_contrast_token={page.token};")
+    assert not page.token_matches("\u00e9t\u00e9") and page.token_matches(page.token)  # any cookie, no traceback
+    args = PersonArgs(page=True, port=0, lan=True, notify="http://127.0.0.1:9/notify")
+    served, notifier = person_channels(args, Answers(io.StringIO("")), print, lambda: tmp_path, None)
+    try:
+        assert "token=" in served.link() and "token" not in notifier.link  # a message passes through others' hands
+    finally:
+        served.close()
+        notifier.close()
+
+
+def test_an_emergency_stop_goes_before_a_line_the_terminal_left_waiting(bench):
+    page, answers, stream = bench
+    local = f"http://127.0.0.1:{page.port}/"
+    json_from_page = {"Origin": local.rstrip("/"), "Content-Type": "application/json"}
+    page.send(event="running")
+    stream.type("")  # a stray Enter at the terminal while the episode runs
+    deadline = time.monotonic() + 5
+    while not answers._lines and time.monotonic() < deadline:  # the terminal's line has reached the queue
+        time.sleep(0.01)
+    assert ask(local + "answer", {"seq": page.seq, "answer": "e", "key": True}, **json_from_page)[0] == 200
+    assert answers.take_key() == "estop"
+    assert answers.next() == ""  # the terminal's line, for the prompt after the trial
+
+
+def test_an_aborted_trial_after_the_episode_is_answered_as_a_prompt(bench):
+    page, answers, _ = bench
+    local = f"http://127.0.0.1:{page.port}/"
+    json_from_page = {"Origin": local.rstrip("/"), "Content-Type": "application/json"}
+    page.send(event="running")
+    page.send(prompt="aborted", trial=0, reason="the robot was stopped")
+    state = page.snapshot()
+    assert not state["running"] and state["prompt"]["prompt"] == "aborted"
+    assert ask(local + "answer", {"seq": page.seq, "answer": "s", "key": True}, **json_from_page)[0] == 409
+    assert ask(local + "answer", {"seq": page.seq, "answer": ""}, **json_from_page)[0] == 200
+    assert answers.next() == ""
+    page.send(event="running")
+    page.send(event="ended", trial=0)  # the arm's episode ended: its keys are gone from the page
+    assert not page.snapshot()["running"]
+
+
+@pytest.mark.parametrize("length", ["abc", "-5", "99999"])
+def test_a_body_of_a_bad_length_is_refused(bench, length):
+    page, _, _ = bench
+    origin = f"http://127.0.0.1:{page.port}"
+    assert raw_post(page.port, "/answer", Origin=origin, Content_Type="application/json", Content_Length=length) == 400

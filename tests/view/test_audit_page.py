@@ -15,6 +15,7 @@ from selenium.webdriver.support.ui import WebDriverWait
 
 from lerobot_contrast.record.audit_labels import AUDIT_FILE, append_label, read_labels
 from lerobot_contrast.record.journal import read_journal
+from tests.operators.test_person_page import raw_post
 from tests.view.browser import chromium, wait_for
 from tests.view.test_browser import page_of  # noqa: F401  (the fixture)
 
@@ -107,6 +108,11 @@ def test_only_the_viewers_own_page_may_label_and_only_a_drawn_done_trial(runs, c
     assert not (run / AUDIT_FILE).exists()  # nothing written by any of them
     assert post(address, label, **own)[0] == 200
     assert read_labels(run)[drawn]["success"] is True and read_labels(run)[drawn]["seconds"] == 2.5
+    for length in ("abc", "-5"):
+        assert raw_post(int(port), "/audit/r0", Content_Type="application/json", Content_Length=length, **own) == 400
+    journal.write_text(journal.read_text() + json.dumps({**records[0], "index": 999}) + "\n")  # not the next trial
+    status, said = post(address, label, **own)
+    assert status == 409 and said["error"].startswith("the run's journal cannot be read")
 
 
 def test_a_label_cut_short_by_a_kill_is_skipped_and_a_later_one_counts(tmp_path):
