@@ -63,6 +63,20 @@ def test_a_stop_reaches_the_service_as_slack_json_with_how_to_go_on(tmp_path, mo
     assert last["text"].startswith("lerobot-contrast: the session stopped") and "--resume=true" in last["text"]
 
 
+def test_a_session_that_fails_tells_the_service_how_to_go_on(tmp_path, monkeypatch, inbox):
+    from lerobot_contrast.spine import evaluation
+
+    def full(*args, **kwargs):
+        raise UserError("no space left on the disk")
+
+    url, received = inbox
+    monkeypatch.setattr(evaluation, "run", full)
+    assert session(monkeypatch, tmp_path / "run", [], f"--person.notify={url}") == 2  # said as one line, as before
+    last = received[-1][1].decode()
+    assert last.startswith("lerobot-contrast: the session stopped (no space left on the disk); continue with")
+    assert "--resume=true" in last
+
+
 def test_a_service_that_fails_is_said_once_and_the_session_goes_on(tmp_path, monkeypatch, capsys):
     closed = "http://127.0.0.1:9/notify"  # the discard port: nothing listens
     assert session(monkeypatch, tmp_path / "run", [""] * 6, f"--person.notify={closed}") == 0
