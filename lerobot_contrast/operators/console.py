@@ -39,18 +39,20 @@ class Answers:
     def __init__(self, stream: IO[str]) -> None:
         self._lines: collections.deque[str] = collections.deque()
         self._closed = False
+        self.served = 0  # the answers next() has handed out: what an offer names as the prompt it answers
         self._ready = threading.Condition()
         self.taken: list[Callable[[], None]] = []  # told each time an answer is taken (the person's page)
         threading.Thread(target=self._read, args=(stream,), daemon=True, name="operator-input").start()
 
-    def offer(self, line: str, key: bool = False) -> bool:
-        """Queue an answer from elsewhere than the stream (the person's page), unless one is already waiting: the
-        first answer to a prompt counts, and a second would answer the prompt after it. An in-trial `key` goes
-        first in the queue, where take_key looks, whatever else waits there (an emergency stop above all)."""
+    def offer(self, line: str, key: bool = False, served: int | None = None) -> bool:
+        """Queue an answer from elsewhere than the stream (the person's page), unless one is already waiting or, with
+        `served` (the count when the prompt was shown), the prompt had its answer: the first answer to a prompt counts,
+        and a second would answer the prompt after it. An in-trial `key` goes first in the queue, where take_key
+        looks, whatever else waits there (an emergency stop above all)."""
         with self._ready:
             if key:
                 self._lines.appendleft(line)
-            elif self._lines:
+            elif self._lines or (served is not None and served != self.served):
                 return False
             else:
                 self._lines.append(line)
@@ -84,6 +86,7 @@ class Answers:
                     raise SessionStopped("the operator's input ended")
                 self._ready.wait()
             line = self._lines.popleft()
+            self.served += 1
         self._tell()
         return line
 

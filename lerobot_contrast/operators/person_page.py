@@ -31,6 +31,7 @@ from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 from lerobot_contrast.contrast.errors import UserError
+from lerobot_contrast.operators.console import Answers
 
 PAGE = Path(__file__).with_name("person_page.html")
 TOKEN_FILE = "person_page.json"
@@ -42,19 +43,20 @@ CLOSE_WAIT_S = 3.0  # at the session's end, time for an open page (it asks every
 
 
 class PersonPage:
-    """The page's server and what it shows. `answer(line, key)`: puts a line into the console's answers if none is
-    waiting there (returns False where the terminal answered first; an in-trial key goes in first); `run_dir`: where the token is kept once the run has one;
+    """The page's server and what it shows. `answers`: the console's, which the page's answers join where the prompt
+    they answer is still open (Answers.offer: the terminal may have answered first); `run_dir`: where the token is kept once the run has one;
     `picture`: the calibrated camera's last overlay (its count, JPEG bytes), where there is one."""
 
     def __init__(
         self,
         port: int,
         lan: bool,
-        answer: Callable[[str, bool], bool],
+        answers: Answers,
         run_dir: Callable[[], Path | None],
         picture: Callable[[], tuple[int, bytes] | None] = lambda: None,
     ) -> None:
-        self.answer, self.run_dir, self.lan, self.picture = answer, run_dir, lan, picture
+        self.answers, self.run_dir, self.lan, self.picture = answers, run_dir, lan, picture
+        self.prompt_served = 0  # the console's answers handed out when the prompt on screen was shown
         self.token = _kept_token(run_dir()) or secrets.token_urlsafe(18)
         self._lock = threading.Lock()
         self.seq = 0  # changes with every prompt and event the console sends: what an answer names
@@ -91,7 +93,7 @@ class PersonPage:
             self.version += 1
             if "prompt" in message:  # every prompt (an aborted trial's too) comes after the episode's keys
                 self.state.update(prompt=message, running=False)
-                self.answered = False
+                self.answered, self.prompt_served = False, self.answers.served
             elif message.get("event") == "trial":
                 self.state.update(trial=message, prompt=None, running=False)
                 self.answered = True
@@ -146,7 +148,7 @@ class PersonPage:
                 return HTTPStatus.CONFLICT, "that was answered already (at the terminal, or on another page)"
             elif seq != self.seq:
                 return HTTPStatus.CONFLICT, "the session has moved on since: look again"
-            if not self.answer(line, key):
+            if not self.answers.offer(line, key, None if key else self.prompt_served):
                 return HTTPStatus.CONFLICT, "the terminal answered first"
             if not key:
                 self.answered = True

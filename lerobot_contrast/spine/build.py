@@ -163,7 +163,7 @@ def person_channels(args: PersonArgs, answers: Answers, say, run_dir, bench) -> 
         if pictured:
             bench.wants_picture = True
         page = PersonPage(
-            args.port, args.lan, answers.offer, run_dir, (lambda: bench.picture) if pictured else (lambda: None)
+            args.port, args.lan, answers, run_dir, (lambda: bench.picture) if pictured else (lambda: None)
         )
         answers.taken.append(page.answered_elsewhere)
         link, told = page.link(), page.link(token=False)

@@ -32,7 +32,7 @@ class Stream:
 def bench(tmp_path):
     stream = Stream()
     answers = Answers(io.TextIOWrapper(io.FileIO(stream.read_end), encoding="utf-8"))
-    page = PersonPage(0, True, answers.offer, lambda: tmp_path)
+    page = PersonPage(0, True, answers, lambda: tmp_path)
     answers.taken.append(page.answered_elsewhere)
     yield page, answers, stream
     page.close()
@@ -116,6 +116,19 @@ def test_the_first_answer_counts_and_a_stale_or_foreign_one_is_refused(bench):
     assert ask(local + "answer", {"seq": page.seq, "answer": "y"}, **json_from_page)[0] == 200
     assert answers.next() == "y"
     assert ask(local + "state", Host="attacker.example")[0] == 401  # a name rebound to 127.0.0.1, no token
+
+
+def test_a_page_answer_to_a_prompt_the_terminal_answered_is_refused_even_before_the_page_hears(tmp_path):
+    """The terminal's line taken, the page not yet told (answers.taken runs after the line is handed out): the page's
+    answer names the prompt it saw, and is refused rather than left to answer the next one."""
+    stream = Stream()
+    answers = Answers(io.TextIOWrapper(io.FileIO(stream.read_end), encoding="utf-8"))
+    shown = answers.served  # the prompt on the page
+    stream.type("y")
+    assert answers.next() == "y"
+    assert not answers.offer("n", served=shown)
+    assert answers.offer("n", served=answers.served)  # the next prompt's answer
+    assert answers.next() == "n"
 
 
 def test_keys_reach_the_running_episode_only_while_it_runs(bench):

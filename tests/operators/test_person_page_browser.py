@@ -103,7 +103,7 @@ def test_a_session_answered_from_a_phone_with_an_undo_a_stop_and_the_resume(tmp_
 def test_the_arms_call_for_a_person_shows_why_and_where_and_fixed_answers_it(tmp_path):
     read_end, _ = os.pipe()  # the terminal, unanswered
     answers = Answers(io.TextIOWrapper(io.FileIO(read_end), encoding="utf-8"))
-    page = PersonPage(0, False, answers.offer, lambda: tmp_path)
+    page = PersonPage(0, False, answers, lambda: tmp_path)
     answers.taken.append(page.answered_elsewhere)
     try:
         page.send(event="trial", trial=4, of=9, instruction="put the red cube next to the green cube", moves={})

@@ -190,7 +190,7 @@ def test_the_persons_page_shows_the_cameras_overlay_of_each_trial(tmp_path, cali
     ev = evaluation(tmp_path / "run", calibration, robot, ["", "", "", ""])
     bench = ev.operator.bench
     bench.wants_picture = True
-    page = PersonPage(0, False, lambda line: False, lambda: tmp_path, lambda: bench.picture)
+    page = PersonPage(0, False, Answers(io.StringIO("")), lambda: tmp_path, lambda: bench.picture)
     ev.operator.channels.append(page)
     try:
         run(ev)
