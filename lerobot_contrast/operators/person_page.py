@@ -44,8 +44,9 @@ CLOSE_WAIT_S = 3.0  # at the session's end, time for an open page (it asks every
 
 class PersonPage:
     """The page's server and what it shows. `answers`: the console's, which the page's answers join where the prompt
-    they answer is still open (Answers.offer: the terminal may have answered first); `run_dir`: where the token is kept once the run has one;
-    `picture`: the calibrated camera's last overlay (its count, JPEG bytes), where there is one."""
+    they answer is still open (Answers.offer: the terminal may have answered first); `run_dir`: where the token is
+    kept once the run has one; `picture`: the calibrated camera's last overlay (its count, JPEG bytes), where there
+    is one."""
 
     def __init__(
         self,
