@@ -22,12 +22,12 @@ SEQUENTIAL = (
 )
 
 
-def labelled(run: Run) -> pd.DataFrame:
+def labelled(run: Run, later: dict[int, dict]) -> pd.DataFrame:
     """The run's done trials with `label` (0/1, the run's label), `drawn` (for the audit), `audited` (labelled by a
-    person: at the bench, in the journal, or later in the viewer, in audit.jsonl) and `person` (that label)."""
+    person: at the bench, in the journal, or later in the viewer: `later`, audit.jsonl's) and `person` (that
+    label)."""
     rows = stats.done(run.results).sort_values("index")
     extra = rows["extra"].map(lambda text: json.loads(text) if isinstance(text, str) and text else {})
-    later = read_labels(run.path)
     person = [e.get("audit", later.get(int(i), {}).get("success")) for e, i in zip(extra, rows["index"], strict=True)]
     person = pd.Series(person, index=rows.index, dtype=object)
     return rows.assign(label=rows["success"].astype(float), audited=person.notna(),
@@ -42,8 +42,9 @@ def audit_section(runs: list[Run]) -> list[str]:
     lines = ["## Labels the camera gave", ""]
     rows, changes, unaudited, notes = [], [], [], []
     for run in arm:
-        df = labelled(run)
-        pace = _viewer_pace(run)
+        later = read_labels(run.path)
+        df = labelled(run, later)
+        pace = _viewer_pace(run.name, later)
         if pace:
             notes.append(pace)
         waiting = int((df["drawn"] & ~df["audited"]).sum())
@@ -81,12 +82,12 @@ def audit_section(runs: list[Run]) -> list[str]:
     return lines
 
 
-def _viewer_pace(run: Run) -> str | None:
-    """How long a person took per label on the viewer's audit page, from the episode's end to the key."""
-    seconds = [label["seconds"] for label in read_labels(run.path).values() if "seconds" in label]
+def _viewer_pace(name: str, later: dict[int, dict]) -> str | None:
+    """How long a person took per label on the viewer's audit page (`later`), from the episode's end to the key."""
+    seconds = [label["seconds"] for label in later.values() if "seconds" in label]
     if not seconds:
         return None
-    return (f"{run.name}: a person took {np.median(seconds):.1f} s per audited trial on the viewer's audit page after "
+    return (f"{name}: a person took {np.median(seconds):.1f} s per audited trial on the viewer's audit page after "
             f"its episode ended (median of {len(seconds)}; 90th percentile {np.quantile(seconds, 0.9):.1f} s).")  # fmt: skip
 
 

@@ -133,9 +133,8 @@ class Pages:
         return None if run_id not in runs else runs[run_id].path
 
     def dataset(self, run_id: str) -> Dataset | None:
-        with self._lock:
-            runs = {f"r{k}": run for k, run in enumerate(self._inputs.runs)}
-        return None if run_id not in runs else _dataset(runs[run_id].path)
+        path = self.run_dir(run_id)
+        return None if path is None else _dataset(path)
 
 
 _DATASETS: dict[Path, Dataset] = {}
