@@ -6,8 +6,9 @@ Per trial j: f_j the run's label (the camera's, or a person's where the camera a
 y_j the person's audit label. With p the share audited, u_j = a_j y_j / p and v_j = f_j (1 - a_j / p); the estimate
 for a weight lambda is mean(u) + lambda mean(v): lambda = 0 is the audit alone, lambda = 1 the camera corrected by
 its audited mistakes. Lambda is chosen to make the clustered variance least (PPI++'s power tuning), clipped to [0, 1],
-and the interval uses Student's t with one degree of freedom fewer than the clusters, its variance floored for small
-audits (PSEUDO). ppi_py's intervals are not clustered, so these are computed here (docs/statistics.md)."""
+and the interval uses Student's t with one degree of freedom fewer than the clusters. A small audit's variance is
+floored (LAPLACE, below), in choosing lambda too. ppi_py's intervals are not clustered, so these are computed here
+(docs/statistics.md)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ import numpy as np
 
 from lerobot_contrast.contrast.intervals import t_quantile
 
-PSEUDO = 2.0  # audited trials added to the rectifier's variance, one disagreement each way (below)
+LAPLACE = 1.0  # pseudo audited trials in each cell of the audit's person-by-camera table, in the variance (below)
 AUDIT_STREAM = 0xA0D17  # the audit's own random stream, apart from the plan's and the trials'
 
 
@@ -73,14 +74,18 @@ def _estimate(f, a, y, signs, clusters, confidence: float, bounds, per_cluster: 
     total = sizes.sum()
     mean_u, mean_v = cluster_u.sum() / total, cluster_v.sum() / total
     r, s = cluster_u - mean_u * sizes, cluster_v - mean_v * sizes  # each cluster's residual, linear in lambda
-    weight = float(np.clip(-(r @ s) / (s @ s), 0.0, 1.0)) if s @ s > 0 else 0.0
+    g = len(names)
+    spread = g / (g - 1) / total**2  # the clustered variance of the mean is spread * |r + lambda s|^2
+    # A small audit may see no disagreement, or every audited label alike, and its variance then says the camera (or
+    # the audit alone) cannot be wrong: lambda leans on it and the interval shrinks to a point. Laplace's rule:
+    # LAPLACE more audited trials in each of the four cells (person 0/1 by camera 0/1), whose y - lambda f vary by
+    # (1 + lambda^2) / 4, weigh in the variance as their share of the audited part, and lambda is tuned with them.
+    cells = 4 * LAPLACE
+    floor = cells / (n_audited + cells) / n_audited * (len(f) / total) ** 2 / 4
+    weight = float(np.clip(-spread * (r @ s) / (spread * (s @ s) + floor), 0.0, 1.0))
     mean = mean_u + weight * mean_v
     residual = r + weight * s
-    g = len(names)
-    variance = g / (g - 1) * (residual @ residual) / total**2
-    # A small audit may see no disagreement, and its variance then says the camera is never wrong: count two more
-    # audited trials, one disagreement each way (Laplace's rule), in the rectifier's variance.
-    variance += (weight * len(f) / total) ** 2 * PSEUDO / (n_audited * (n_audited + PSEUDO))
+    variance = spread * (residual @ residual) + floor * (1 + weight**2)
     half = t_quantile(g - 1, confidence) * np.sqrt(variance)
     low, high = max(bounds[0], mean - half), min(bounds[1], mean + half)
     return AuditedEstimate(float(mean), float(low), float(high), weight, len(f), n_audited, g)

@@ -24,11 +24,28 @@ def test_the_estimate_matches_a_worked_example():
     person, bases = [1, None, None, 1, 0, None], ["a", "a", "b", "b", "c", "c"]
     said = rate(labels, audit, person, bases)
     # u = a*y/p = [2,0,0,2,0,0], v = f*(1-a/p) = [-1,1,0,-1,0,1]; per base U = [2,2,0], V = [0,-1,1].
-    # r = U - (2/3)*2 = [2/3, 2/3, -4/3], s = V; lambda = -(r.s)/(s.s) = 2/2 = 1; mean = 2/3 + 1 * 0.
-    assert (said.mean, said.weight, said.n_audited, said.n_clusters) == (pytest.approx(2 / 3), 1.0, 3, 3)
-    # residual r + s = [2/3, -1/3, -1/3]: clustered variance 3/2 * 6/9 / 36 = 1/36, plus Laplace's 2/(3*5).
-    half = t_quantile(2) * math.sqrt(1 / 36 + 2 / 15)
+    # r = U - (2/3)*2 = [2/3, 2/3, -4/3], s = V: r.s = -2, s.s = 2, the clustered spread 3/2 / 36 = 1/24. Laplace's
+    # four pseudo-trials over three audited: floor 4/7 / 3 / 4 = 1/21. lambda = (2/24) / (2/24 + 1/21) = 7/11.
+    assert (said.mean, said.weight, said.n_audited, said.n_clusters) == (
+        pytest.approx(2 / 3),
+        pytest.approx(7 / 11),
+        3,
+        3,
+    )
+    # residual r + 7/11 s = [2/3, 1/33, -23/33], |.|^2 = 1014/1089; plus the floor times 1 + 49/121.
+    half = t_quantile(2) * math.sqrt(1014 / 1089 / 24 + 170 / 121 / 21)
     assert (said.low, said.high) == (pytest.approx(max(0.0, 2 / 3 - half)), pytest.approx(min(1.0, 2 / 3 + half)))
+
+
+def test_a_small_audit_whose_labels_are_all_alike_still_has_an_interval():
+    # Three of 120 trials audited, every one a failure the camera saw as one: the audit alone looks certain (its
+    # variance is 0), and without the floor lambda took it, giving the interval [0, 0] around a rate near 0.4.
+    rng = np.random.default_rng(3)
+    labels = (rng.random(120) < 0.4).astype(float)
+    audit = np.zeros(120, bool)
+    audit[np.flatnonzero(labels == 0)[:3]] = True
+    said = rate(labels, audit, np.where(audit, labels, np.nan), np.repeat(np.arange(60), 2))
+    assert said.high - said.low > 0.2 and said.low < labels.mean() < said.high
 
 
 def test_with_a_camera_that_always_says_success_the_estimate_follows_the_audit():
