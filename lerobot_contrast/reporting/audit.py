@@ -69,7 +69,9 @@ def audit_section(runs: list[Run]) -> list[str]:
         lines += ["", "Prediction-powered estimates (PPI++, Angelopoulos, Duchi and Zrnic 2023) combine every label "
                   "with a person's labels of a random audit; their 95% intervals, clustered by base, hold whatever "
                   "the camera's mistakes (scripts/bench/bench_audit.py measures their coverage). lambda near 1: the "
-                  "camera agrees with the person and the interval nears the camera's own.", ""]  # fmt: skip
+                  "camera agrees with the person and the interval nears the camera's own. A small audit gives a wide "
+                  "interval: tens of labels cannot rule out a camera whose few mistakes lean one way "
+                  "(docs/statistics.md).", ""]  # fmt: skip
     if changes:
         header = ["run", "perturbation", "bases", "change (camera's labels)", "change (audited, PPI++)"]
         lines += table(header, changes) + [""]
