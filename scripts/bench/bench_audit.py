@@ -120,9 +120,9 @@ def main() -> None:
         cover = {k: np.mean([low <= truth[k.split("_")[0]] <= high for low, high in (r[k] for r in runs)])
                  for k in runs[0]}  # fmt: skip
         unseen = {k: 1 - np.mean([s[k] for s in seen]) for k in truth}
-        for k in truth:
-            camera_mid = np.array([sum(r[f"{k}_camera"]) / 2 for r in runs])
-            bias = abs(camera_mid.mean() - truth[k]) / camera_mid.std()
+        for k in truth:  # the camera's bias where the audit saw no mistake, in its standard errors
+            camera_mid = np.array([sum(r[f"{k}_camera"]) / 2 for r, s in zip(runs, seen, strict=True) if not s[k]])
+            bias = abs(camera_mid.mean() - truth[k]) / camera_mid.std() if len(camera_mid) > 1 else 0.0
             by_share[share]["least"].append(least_coverage_max(unseen[k], bias) if error > 0 else 0.0)
         covered += [cover["rate"], cover["change"]]
         by_share[share]["coverage"] += [cover["rate"], cover["change"]]
